@@ -1,0 +1,38 @@
+// The `cementsph` program is one binary with subcommands (as `git log`, `plastimatch drr`).
+// Each subcommand lives in its own <Name>Command.cpp, is a thin layer over the modules, and
+// registers itself here with CEMENTSPH_REGISTER_COMMAND, so adding a command touches no shared file.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace cementsph::app {
+
+// A subcommand declares its options on `sub` and returns the function that runs it.
+// The runner returns the process exit code; it throws cementsph::app::UsageError (or any
+// std::exception) for bad input, which main() turns into one line on stderr and a non-zero exit.
+using CommandRunner = std::function<int()>;
+using CommandSetup = std::function<CommandRunner(CLI::App& sub)>;
+
+struct Command {
+  std::string name;
+  std::string summary;
+  CommandSetup setup;
+};
+
+class CommandRegistry {
+public:
+  static std::vector<Command>& commands();
+  static bool add(Command command);
+};
+
+} // namespace cementsph::app
+
+#define CEMENTSPH_REGISTER_COMMAND(IDENT, NAME, SUMMARY, SETUP)                                    \
+  namespace {                                                                                      \
+  [[maybe_unused]] const bool registered_##IDENT =                                                 \
+      ::cementsph::app::CommandRegistry::add({NAME, SUMMARY, SETUP});                              \
+  }

@@ -1,0 +1,57 @@
+// cementsph: the command-line front end. `cementsph --help` lists the subcommands.
+#include "CommandRegistry.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+#include <map>
+
+namespace cementsph::app {
+
+std::vector<Command>& CommandRegistry::commands() {
+  static std::vector<Command> all;
+  return all;
+}
+
+bool CommandRegistry::add(Command command) {
+  commands().push_back(std::move(command));
+  return true;
+}
+
+} // namespace cementsph::app
+
+int main(int argc, char** argv) {
+  using namespace cementsph::app;
+  CLI::App app{"CementSPH: predicts how PMMA bone cement spreads through porous bone (SPH, "
+               "Basafa et al. 2013) and checks it against CT.",
+               "cementsph"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "cementsph 0.1.0");
+
+  auto& commands = CommandRegistry::commands();
+  std::sort(commands.begin(), commands.end(),
+            [](const Command& a, const Command& b) { return a.name < b.name; });
+  std::map<CLI::App*, CommandRunner> runners;
+  for (const Command& command : commands) {
+    CLI::App* sub = app.add_subcommand(command.name, command.summary);
+    runners[sub] = command.setup(*sub);
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  for (auto& [sub, run] : runners) {
+    if (!sub->parsed()) continue;
+    try {
+      return run();
+    } catch (const std::exception& e) {
+      std::cerr << "cementsph " << sub->get_name() << ": error: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  return 1;
+}

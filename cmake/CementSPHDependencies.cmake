@@ -1,0 +1,32 @@
+# Every third-party package the project uses, found in one place. All come from Debian 12
+# (scripts/install-deps.sh installs them).
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(OpenMP REQUIRED COMPONENTS CXX)
+find_package(CLI11 REQUIRED)
+find_package(nlohmann_json 3.10 REQUIRED)
+
+# VTK 9.1: list components explicitly (see shared platform notes). Rendering runs on an X display;
+# on a headless machine the Rendering module starts a virtual one (Xvfb) itself.
+find_package(VTK 9.1 REQUIRED COMPONENTS
+  CommonCore CommonDataModel CommonExecutionModel CommonSystem CommonTransforms CommonMisc
+  ChartsCore ViewsContext2D RenderingContext2D RenderingContextOpenGL2
+  RenderingCore RenderingOpenGL2 RenderingFreeType RenderingAnnotation RenderingVolume
+  InteractionStyle IOImage IOXML IOLegacy
+  FiltersCore FiltersGeneral FiltersGeometry FiltersModeling FiltersSources FiltersExtraction
+  ImagingCore ImagingGeneral ImagingMath ImagingStatistics ImagingMorphological
+  TestingRendering)
+
+# ITK 5.2 (Debian): no ITKVtkGlue, so the imaging module carries its own geometry-preserving bridge.
+find_package(ITK 5.2 REQUIRED COMPONENTS
+  ITKCommon ITKIOImageBase ITKIONRRD ITKIOMeta ITKIONIFTI ITKIOGDCM ITKIOTransformBase
+  ITKIOTransformInsightLegacy ITKRegistrationMethodsv4 ITKOptimizersv4 ITKMetricsv4
+  ITKTransform ITKImageGrid ITKImageFilterBase ITKThresholding ITKConnectedComponents
+  ITKMathematicalMorphology ITKBinaryMathematicalMorphology ITKSmoothing ITKImageIntensity
+  ITKImageStatistics ITKLabelMap ITKDistanceMap ITKTestKernel)
+
+if(CEMENTSPH_BUILD_TESTING)
+  find_package(GTest REQUIRED)
+endif()
+if(CEMENTSPH_BUILD_BENCHMARKS)
+  find_package(benchmark REQUIRED)
+endif()

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package CementSPH uses. Idempotent; run as root or with sudo.
+# This is the one place the project's install list lives (README, .ci/run and developers all call it).
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  cmake g++ make pkg-config
+  # core numerics
+  libeigen3-dev libomp-dev
+  # imaging and visualisation
+  libvtk9-dev libinsighttoolkit5-dev libtbb-dev
+  # tests, benchmarks, command line, JSON
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
+  # off-screen rendering on headless machines (virtual X server + Mesa software GL)
+  xvfb xauth
+)
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "install-deps.sh: must run as root or with sudo available" >&2; exit 1; fi
+fi
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps.sh: all ${#PACKAGES[@]} packages already installed"
+  exit 0
+fi
+
+echo "install-deps.sh: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
