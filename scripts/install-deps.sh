@@ -7,13 +7,13 @@ PACKAGES=(
   # toolchain
   cmake g++ make pkg-config
   # core numerics
-  libeigen3-dev libomp-dev
+  libeigen3-dev
   # imaging and visualisation
-  libvtk9-dev libinsighttoolkit5-dev libtbb-dev
+  libvtk9-dev libinsighttoolkit5-dev libgdcm-tools libtbb-dev
   # tests, benchmarks, command line, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # off-screen rendering on headless machines (virtual X server + Mesa software GL)
-  xvfb xauth
+  xvfb xauth libgl1-mesa-dri
 )
 
 SUDO=""
