@@ -1,0 +1,127 @@
+// The particle model of Basafa et al. 2013: weakly compressible SPH with fixed particles for the
+// porous solid.
+//
+// One step: neighbour lists (reused while the skin allows) -> density by summation over fluid and
+// fixed particles (Eq. 2) -> pressure (Eq. 6) -> symmetric pressure force (Eq. 5), body force and, for
+// Morris viscosity, Eq. 7 -> integration (Eq. 8 with the Eq. 9 drag implicit; explicit; or
+// overdamped) -> periodic wrap or removal at open sides -> a health check that stops a run going
+// unstable with a message saying where and why.
+//
+// Fixed particles count as fluid particles for the density and pressure of moving ones but keep
+// their own density, pressure, position and (zero) velocity (the paper, "Particle Fluid Model").
+#pragma once
+
+#include "cementsph/sph/Domain.h"
+#include "cementsph/sph/Kernels.h"
+#include "cementsph/sph/ModelParameters.h"
+#include "cementsph/sph/NeighbourSearch.h"
+#include "cementsph/sph/Particles.h"
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cementsph::sph {
+
+// Thrown when the parameters are inconsistent or a run becomes unstable; what() says where and why.
+class SimulationError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+// The time-step limits that apply to the current scheme [s]; +inf where a limit does not apply.
+struct StepLimits {
+  double acoustic;     // C h / cs: explicit pressure term (every scheme but overdamped)
+  double viscous;      // C h^2 / nu: explicit Morris viscosity
+  double drag;         // 1 / gamma_max: explicit drag (the Explicit scheme only)
+  double force;        // C sqrt(h / |a|max)
+  double overdamped;   // C gamma_min h^2 / cs^2: overdamped stability
+  double displacement; // maxDisplacement h / |v|max: overdamped accuracy
+  double stable() const; // the smallest of the stability limits (all but displacement)
+};
+
+struct StepStatistics {
+  std::uint64_t steps = 0;
+  std::uint64_t neighbourRebuilds = 0;
+  double smallestStep = 0.0, largestStep = 0.0;
+};
+
+class Simulation {
+public:
+  Simulation(const ModelParameters& parameters, const Domain& domain);
+
+  // --- set-up ------------------------------------------------------------------------------------
+  std::uint64_t addFluidParticle(const Eigen::Vector3d& position, const Eigen::Vector3d& velocity, double mass);
+  void addFixedParticle(const Eigen::Vector3d& position, double mass);
+  void reserveFluid(std::size_t n) { fluid_.reserve(n); }
+
+  // --- running -----------------------------------------------------------------------------------
+  // Advances one step and returns its length [s]. Throws SimulationError if the run goes unstable.
+  double step();
+  // Density and pressure of the current configuration (done by step(); exposed for tests and output).
+  void updateDensityAndPressure();
+  // Accelerations from pressure, body force and explicit viscosity (done by step()).
+  void updateAccelerations();
+
+  // --- state -------------------------------------------------------------------------------------
+  const ModelParameters& parameters() const { return parameters_; }
+  // Viscosity may change during a run (the cement cures); one value for all particles at a time.
+  void setViscosity(double viscosityPaS);
+  void setBodyForce(const Eigen::Vector3d& force) { parameters_.bodyForce = force; }
+  const Domain& domain() const { return domain_; }
+  const FluidParticles& fluid() const { return fluid_; }
+  FluidParticles& fluid() { return fluid_; }
+  const FixedParticles& fixed() const { return fixed_; }
+  double time() const { return time_; }
+  const StepStatistics& statistics() const { return statistics_; }
+  std::uint64_t escapedCount() const { return escaped_; }
+  double kineticEnergy() const;
+  StepLimits currentLimits() const;
+  // The step the next call to step() will take, given the current state.
+  double nextTimeStep() const;
+  std::size_t neighbourPairCount() const { return fluidNeighbours_.size() + fixedNeighbours_.size(); }
+  std::size_t bytesPerFixedParticle() const;
+  // Messages about the run that are not errors (e.g. a user's time step clamped to a limit).
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+private:
+  void validateParameters() const;
+  bool listsNeedRebuild() const;
+  void rebuildNeighbourLists();
+  template <bool Periodic> void buildLists();
+  template <bool Periodic> void densityPass();
+  template <bool Periodic, bool Morris> void forcePass();
+  double chooseTimeStep(const StepLimits& limits);
+  void integrate(double dt);
+  void applyBoundaries();
+  void checkHealth(double dt) const;
+  double maxDragRate() const;
+  double minDragRate() const;
+  std::string describeParticle(std::size_t i) const;
+
+  ModelParameters parameters_;
+  Domain domain_;
+  CubicSplineKernel densityKernel_;
+  SpikyKernel pressureKernel_;
+  FluidParticles fluid_;
+  FixedParticles fixed_;
+
+  CellGrid grid_;
+  bool anyPeriodic_ = false;
+  double halfExtent_[3], extent_[3]; // minimum image: half = +inf on open axes
+  std::vector<std::uint32_t> fixedCellStart_, fluidCellStart_;
+  bool fixedBinned_ = false;
+  NeighbourList fluidNeighbours_, fixedNeighbours_;
+  bool listsValid_ = false;
+  std::vector<double> refX_, refY_, refZ_; // positions at the last rebuild (skin test)
+
+  double time_ = 0.0;
+  double centralDifferenceStep_ = 0.0; // the constant dt of Eq. 8 once chosen
+  std::uint64_t nextId_ = 0;
+  std::uint64_t escaped_ = 0;
+  StepStatistics statistics_;
+  std::vector<std::string> warnings_;
+};
+
+} // namespace cementsph::sph

@@ -1,0 +1,40 @@
+#include "cementsph/sph/ModelParameters.h"
+
+#include <stdexcept>
+
+namespace cementsph::sph {
+
+std::string toString(ViscosityModel model) {
+  switch (model) {
+  case ViscosityModel::None: return "none";
+  case ViscosityModel::Drag: return "drag";
+  case ViscosityModel::Morris: return "morris";
+  }
+  return "?";
+}
+
+std::string toString(Integrator integrator) {
+  switch (integrator) {
+  case Integrator::CentralDifference: return "central-difference";
+  case Integrator::Explicit: return "explicit";
+  case Integrator::Overdamped: return "overdamped";
+  }
+  return "?";
+}
+
+ViscosityModel parseViscosityModel(const std::string& name) {
+  if (name == "none") return ViscosityModel::None;
+  if (name == "drag") return ViscosityModel::Drag;
+  if (name == "morris") return ViscosityModel::Morris;
+  throw std::invalid_argument("unknown viscosity model '" + name + "' (expected drag, morris or none)");
+}
+
+Integrator parseIntegrator(const std::string& name) {
+  if (name == "central-difference" || name == "paper") return Integrator::CentralDifference;
+  if (name == "explicit") return Integrator::Explicit;
+  if (name == "overdamped") return Integrator::Overdamped;
+  throw std::invalid_argument("unknown integrator '" + name +
+                              "' (expected central-difference, explicit or overdamped)");
+}
+
+} // namespace cementsph::sph
