@@ -12,6 +12,7 @@
 #include <fstream>
 
 using cementsph::rendering::imageDifference;
+using cementsph::rendering::meanAbsoluteDifference;
 
 namespace {
 // A w x h RGB image whose left `blackColumns` columns are black and the rest white.
@@ -40,8 +41,24 @@ TEST(ImageCompare, ExactOracles) {
   const auto half = writeTestPng(dir / "half.png", 8, 4, 4);
   EXPECT_DOUBLE_EQ(imageDifference(white, white), 0.0);
   EXPECT_DOUBLE_EQ(imageDifference(white, black), 1.0);
+  // Columns 0..3 are black in one and white everywhere near them in the other.
   EXPECT_DOUBLE_EQ(imageDifference(white, half), 0.5);
   EXPECT_DOUBLE_EQ(imageDifference(half, white), 0.5);
+  EXPECT_DOUBLE_EQ(meanAbsoluteDifference(white, white), 0.0);
+  EXPECT_DOUBLE_EQ(meanAbsoluteDifference(white, black), 1.0);
+  EXPECT_DOUBLE_EQ(meanAbsoluteDifference(half, white), 0.5);
+}
+
+TEST(ImageCompare, OnePixelShiftIsNotADifference) {
+  const auto dir = cementsph::rendering::test::scratchFolder();
+  const auto edgeAt4 = writeTestPng(dir / "edge4.png", 8, 4, 4);
+  const auto edgeAt5 = writeTestPng(dir / "edge5.png", 8, 4, 5);
+  const auto edgeAt6 = writeTestPng(dir / "edge6.png", 8, 4, 6);
+  EXPECT_DOUBLE_EQ(imageDifference(edgeAt4, edgeAt5), 0.0);
+  EXPECT_DOUBLE_EQ(meanAbsoluteDifference(edgeAt4, edgeAt5), 0.125); // the strict measure does see it
+  // Two pixels is a real change: column 4 (white, only black within one pixel in the other image) and
+  // column 5 (black, only white nearby in the other) count, 2 of 8 columns.
+  EXPECT_DOUBLE_EQ(imageDifference(edgeAt4, edgeAt6), 0.25);
 }
 
 TEST(ImageCompare, RejectsDifferentSizesAndNonPng) {

@@ -18,10 +18,11 @@ using cementsph::rendering::test::summarisePng;
 
 namespace {
 
-// Mean absolute channel difference allowed against a baseline. Re-rendering on the same software stack
-// gives 0; the margin absorbs small font or rasteriser changes between Mesa/FreeType versions, while a
-// different curve (see DifferentPlotDoesNotMatchBaseline) differs by several times more.
-constexpr double kBaselineTolerance = 0.002;
+// Fraction of visibly changed pixels (imageDifference) allowed against a baseline: about 120 of the
+// 585 000 pixels of a 900 x 650 plot. Re-rendering on the same software stack gives 0, and one-pixel
+// shifts of text or lines from another Mesa/FreeType version do not count at all; moving a few markers
+// (DifferentPlotDoesNotMatchBaseline) changes several times more.
+constexpr double kBaselineTolerance = 2e-4;
 
 const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
 

@@ -12,6 +12,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace cementsph::rendering {
 namespace {
@@ -23,18 +25,18 @@ struct RgbImage {
 
 RgbImage readPng(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path)) {
-    throw std::runtime_error("imageDifference: " + path.string() + " does not exist");
+    throw std::runtime_error("image comparison: " + path.string() + " does not exist");
   }
   vtkNew<vtkPNGReader> reader;
   if (reader->CanReadFile(path.string().c_str()) == 0) {
-    throw std::runtime_error("imageDifference: " + path.string() + " is not a PNG file");
+    throw std::runtime_error("image comparison: " + path.string() + " is not a PNG file");
   }
   reader->SetFileName(path.string().c_str());
   reader->Update();
   vtkImageData* image = reader->GetOutput();
   vtkDataArray* scalars = image != nullptr ? image->GetPointData()->GetScalars() : nullptr;
   if (scalars == nullptr || reader->GetErrorCode() != 0) {
-    throw std::runtime_error("imageDifference: could not read " + path.string());
+    throw std::runtime_error("image comparison: could not read " + path.string());
   }
   int dims[3];
   image->GetDimensions(dims);
@@ -59,15 +61,54 @@ RgbImage readPng(const std::filesystem::path& path) {
 
 } // namespace
 
-double imageDifference(const std::filesystem::path& a, const std::filesystem::path& b) {
-  const RgbImage imageA = readPng(a);
-  const RgbImage imageB = readPng(b);
+namespace {
+
+std::pair<RgbImage, RgbImage> readSameSizePair(const std::filesystem::path& a, const std::filesystem::path& b) {
+  RgbImage imageA = readPng(a);
+  RgbImage imageB = readPng(b);
   if (imageA.width != imageB.width || imageA.height != imageB.height) {
-    throw std::runtime_error("imageDifference: sizes differ, " + a.string() + " is " +
+    throw std::runtime_error("image comparison: sizes differ, " + a.string() + " is " +
                              std::to_string(imageA.width) + " x " + std::to_string(imageA.height) + ", " +
                              b.string() + " is " + std::to_string(imageB.width) + " x " +
                              std::to_string(imageB.height));
   }
+  return {std::move(imageA), std::move(imageB)};
+}
+
+// True if pixel (x, y) of `from` has no pixel within kVisibleChannelDifference in the 3 x 3 neighbourhood
+// of (x, y) in `in`.
+bool hasNoMatchNearby(const RgbImage& from, const RgbImage& in, int x, int y) {
+  const float* p = &from.rgb[(static_cast<std::size_t>(y) * static_cast<std::size_t>(from.width) +
+                              static_cast<std::size_t>(x)) * 3];
+  for (int ny = std::max(0, y - 1); ny <= std::min(in.height - 1, y + 1); ++ny) {
+    for (int nx = std::max(0, x - 1); nx <= std::min(in.width - 1, x + 1); ++nx) {
+      const float* q = &in.rgb[(static_cast<std::size_t>(ny) * static_cast<std::size_t>(in.width) +
+                                static_cast<std::size_t>(nx)) * 3];
+      if (std::abs(p[0] - q[0]) <= kVisibleChannelDifference && std::abs(p[1] - q[1]) <= kVisibleChannelDifference &&
+          std::abs(p[2] - q[2]) <= kVisibleChannelDifference) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+} // namespace
+
+double imageDifference(const std::filesystem::path& a, const std::filesystem::path& b) {
+  const auto [imageA, imageB] = readSameSizePair(a, b);
+  if (imageA.rgb.empty()) return 0.0;
+  std::size_t changed = 0;
+  for (int y = 0; y < imageA.height; ++y) {
+    for (int x = 0; x < imageA.width; ++x) {
+      if (hasNoMatchNearby(imageA, imageB, x, y) || hasNoMatchNearby(imageB, imageA, x, y)) ++changed;
+    }
+  }
+  return static_cast<double>(changed) / (static_cast<double>(imageA.width) * static_cast<double>(imageA.height));
+}
+
+double meanAbsoluteDifference(const std::filesystem::path& a, const std::filesystem::path& b) {
+  const auto [imageA, imageB] = readSameSizePair(a, b);
   if (imageA.rgb.empty()) return 0.0;
   double sum = 0.0;
   for (std::size_t i = 0; i < imageA.rgb.size(); ++i) {

@@ -24,7 +24,9 @@ namespace {
 
 constexpr int kStartTimeoutMs = 10000;
 
-std::once_flag gOnce;
+std::mutex gMutex;
+// The DISPLAY value known to work: an outside server that opened, or our Xvfb.
+std::string gSettledDisplay;
 pid_t gXvfbPid = -1;
 // Only the process that started Xvfb may stop it: a forked child (e.g. a gtest death test) that exits
 // must not take the parent's display away.
@@ -130,7 +132,8 @@ std::string readDisplayNumber(int readFd, pid_t pid) {
   return digits;
 }
 
-void startVirtualServer() {
+// Returns the DISPLAY string of the started server.
+std::string startVirtualServer() {
   const std::string xvfb = findOnPath("Xvfb");
   if (xvfb.empty()) {
     throw std::runtime_error(
@@ -201,16 +204,28 @@ void startVirtualServer() {
     registered = true;
   }
   setenv("DISPLAY", display.c_str(), 1);
+  return display;
 }
 
 } // namespace
 
 void VirtualDisplay::ensureDisplay() {
-  // call_once: a throwing attempt leaves the flag unset, so a later call tries again.
-  std::call_once(gOnce, [] {
-    if (canOpenDisplay(std::getenv("DISPLAY"))) return;
-    startVirtualServer();
-  });
+  // A mutex rather than std::call_once: besides starting Xvfb at most once, every call re-checks that
+  // DISPLAY still names the display we settled on (code in between may have unset or changed it, and VTK
+  // would abort on a bad one). After the first call this is a string comparison, no X round trip.
+  // A throwing attempt leaves nothing settled, so a later call tries again.
+  std::lock_guard<std::mutex> lock(gMutex);
+  const char* current = std::getenv("DISPLAY");
+  if (gXvfbPid > 0) {
+    if (current == nullptr || gSettledDisplay != current) setenv("DISPLAY", gSettledDisplay.c_str(), 1);
+    return;
+  }
+  if (current != nullptr && !gSettledDisplay.empty() && gSettledDisplay == current) return;
+  if (canOpenDisplay(current)) {
+    gSettledDisplay = current;
+    return;
+  }
+  gSettledDisplay = startVirtualServer();
 }
 
 std::string VirtualDisplay::displayName() {
@@ -218,6 +233,9 @@ std::string VirtualDisplay::displayName() {
   return name != nullptr ? name : "";
 }
 
-bool VirtualDisplay::startedVirtualServer() { return gXvfbPid > 0; }
+bool VirtualDisplay::startedVirtualServer() {
+  std::lock_guard<std::mutex> lock(gMutex);
+  return gXvfbPid > 0;
+}
 
 } // namespace cementsph::rendering

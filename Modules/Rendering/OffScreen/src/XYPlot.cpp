@@ -13,6 +13,7 @@
 #include <vtkRenderer.h>
 #include <vtkSmartPointer.h>
 #include <vtkTable.h>
+#include <vtkTextProperty.h>
 
 #include <algorithm>
 #include <cmath>
@@ -123,6 +124,7 @@ void writePlotPng(const PlotSpec& spec, const std::filesystem::path& png) {
   auto chart = vtkSmartPointer<vtkChartXY>::New();
   view->GetScene()->AddItem(chart);
   chart->SetTitle(spec.title);
+  chart->GetTitleProperties()->SetFontSize(16);
   chart->SetShowLegend(spec.series.size() > 1);
   if (spec.series.size() > 1) {
     chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);

@@ -12,8 +12,10 @@ namespace cementsph::rendering {
 
 class VirtualDisplay {
 public:
-  // Idempotent and thread-safe. Throws std::runtime_error (one line) if no display can be had, e.g.
-  // when Xvfb is not installed. A failed attempt is retried by the next call.
+  // Idempotent and thread-safe; cheap after the first call. Xvfb is started at most once per process, and
+  // if DISPLAY was unset or changed since, it is pointed back at the display settled on. Throws
+  // std::runtime_error (one line) if no display can be had, e.g. when Xvfb is not installed; a failed
+  // attempt is retried by the next call.
   // Note: it may setenv("DISPLAY"); other threads must not read the environment at that moment.
   static void ensureDisplay();
 
