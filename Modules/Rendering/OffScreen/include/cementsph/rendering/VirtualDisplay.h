@@ -1,0 +1,29 @@
+// An X display for VTK on machines that have none.
+//
+// Debian's VTK 9.1 is built for GLX only (no OSMesa, no EGL): a render window without a reachable X
+// display aborts the whole process. ensureDisplay() is therefore the first call of every rendering entry
+// point. If DISPLAY names a server we can connect to, it does nothing; otherwise it starts a private
+// Xvfb (Mesa llvmpipe does the drawing), points DISPLAY at it, and stops it when the program exits.
+#pragma once
+
+#include <string>
+
+namespace cementsph::rendering {
+
+class VirtualDisplay {
+public:
+  // Idempotent and thread-safe; cheap after the first call. Xvfb is started at most once per process, and
+  // if DISPLAY was unset or changed since, it is pointed back at the display settled on. Throws
+  // std::runtime_error (one line) if no display can be had, e.g. when Xvfb is not installed; a failed
+  // attempt is retried by the next call.
+  // Note: it may setenv("DISPLAY"); other threads must not read the environment at that moment.
+  static void ensureDisplay();
+
+  // The DISPLAY string currently in use, after ensureDisplay().
+  static std::string displayName();
+
+  // True if this process started its own Xvfb.
+  static bool startedVirtualServer();
+};
+
+} // namespace cementsph::rendering

@@ -1,0 +1,65 @@
+// Helpers shared by the rendering tests: a scratch folder per test and a look at a PNG's pixels.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <tuple>
+
+namespace cementsph::rendering::test {
+
+// An empty folder under the build tree named after the running test.
+inline std::filesystem::path scratchFolder() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::filesystem::path dir = std::filesystem::path(CEMENTSPH_BINARY_DIR) / "Testing" / "Temporary" /
+                              "rendering" / (std::string(info->test_suite_name()) + "." + info->name());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// The headless case CI sees: no display at all.
+inline void forgetDisplay() { unsetenv("DISPLAY"); }
+
+struct PngSummary {
+  int width = 0, height = 0;
+  std::size_t distinctColours = 0;
+  double nonWhiteFraction = 0.0;
+};
+
+inline PngSummary summarisePng(const std::filesystem::path& png) {
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(png.string().c_str());
+  reader->Update();
+  vtkImageData* image = reader->GetOutput();
+  int dims[3] = {0, 0, 0};
+  image->GetDimensions(dims);
+  PngSummary s;
+  s.width = dims[0];
+  s.height = dims[1];
+  auto* pixels = vtkUnsignedCharArray::SafeDownCast(image->GetPointData()->GetScalars());
+  if (pixels == nullptr || pixels->GetNumberOfComponents() < 3) return s;
+  std::set<std::tuple<int, int, int>> colours;
+  std::size_t nonWhite = 0;
+  for (vtkIdType p = 0; p < pixels->GetNumberOfTuples(); ++p) {
+    const int r = pixels->GetValue(p * pixels->GetNumberOfComponents());
+    const int g = pixels->GetValue(p * pixels->GetNumberOfComponents() + 1);
+    const int b = pixels->GetValue(p * pixels->GetNumberOfComponents() + 2);
+    colours.emplace(r, g, b);
+    if (r < 250 || g < 250 || b < 250) ++nonWhite;
+  }
+  s.distinctColours = colours.size();
+  s.nonWhiteFraction = static_cast<double>(nonWhite) / static_cast<double>(pixels->GetNumberOfTuples());
+  return s;
+}
+
+} // namespace cementsph::rendering::test

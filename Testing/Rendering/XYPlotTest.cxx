@@ -1,0 +1,200 @@
+// writePlotPng on a machine without a display: exact size, real content, a stored baseline, and input
+// checks that fail cleanly.
+#include "RenderingTestSupport.h"
+
+#include "cementsph/rendering/ImageCompare.h"
+#include "cementsph/rendering/XYPlot.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+using namespace cementsph::rendering;
+using cementsph::rendering::test::forgetDisplay;
+using cementsph::rendering::test::scratchFolder;
+using cementsph::rendering::test::summarisePng;
+
+namespace {
+
+// Fraction of visibly changed pixels (imageDifference) allowed against a baseline: about 120 of the
+// 585 000 pixels of a 900 x 650 plot. Re-rendering on the same software stack gives 0, and one-pixel
+// shifts of text or lines from another Mesa/FreeType version do not count at all; moving a few markers
+// (DifferentPlotDoesNotMatchBaseline) changes several times more.
+constexpr double kBaselineTolerance = 2e-4;
+
+const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
+
+PlotSpec basicSpec() {
+  PlotSpec spec;
+  spec.title = "y = x^2";
+  spec.xLabel = "x";
+  spec.yLabel = "y";
+  PlotSeries curve;
+  curve.name = "x^2";
+  curve.style = PlotSeries::Style::Line;
+  for (int i = 0; i <= 40; ++i) {
+    const double x = 0.25 * i;
+    curve.x.push_back(x);
+    curve.y.push_back(x * x);
+  }
+  PlotSeries samples;
+  samples.name = "samples";
+  samples.style = PlotSeries::Style::Points;
+  samples.rgb = {255, 127, 14};
+  for (int i = 0; i <= 10; ++i) {
+    const double x = i;
+    samples.x.push_back(x);
+    samples.y.push_back(x * x + 6.0 * std::sin(1.7 * x));
+  }
+  spec.series = {curve, samples};
+  return spec;
+}
+
+// Compares with a baseline, or (CEMENTSPH_UPDATE_BASELINES=1) replaces the baseline with the rendering.
+void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName) {
+  const std::filesystem::path baseline = kBaselineDir / baselineName;
+  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
+    std::filesystem::create_directories(kBaselineDir);
+    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
+    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
+  }
+  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
+  const double difference = imageDifference(rendered, baseline);
+  EXPECT_LE(difference, kBaselineTolerance) << rendered << " differs from " << baseline;
+  std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
+}
+
+void expectNotBlank(const std::filesystem::path& png, int width, int height) {
+  const auto s = summarisePng(png);
+  EXPECT_EQ(s.width, width);
+  EXPECT_EQ(s.height, height);
+  EXPECT_GT(s.distinctColours, 20u) << "hardly any colours: blank image?";
+  EXPECT_GT(s.nonWhiteFraction, 0.01) << "almost all background";
+  EXPECT_LT(s.nonWhiteFraction, 0.6) << "almost no background";
+}
+
+bool folderIsEmpty(const std::filesystem::path& dir) {
+  return std::filesystem::directory_iterator(dir) == std::filesystem::directory_iterator();
+}
+
+} // namespace
+
+TEST(XYPlot, BasicPlotMatchesBaseline) {
+  forgetDisplay();
+  const auto png = scratchFolder() / "xyplot_basic.png";
+  writePlotPng(basicSpec(), png);
+  expectNotBlank(png, 900, 650);
+  expectMatchesBaseline(png, "xyplot_basic.png");
+}
+
+// Guards the comparison itself: if this passed, the baseline test would prove nothing.
+TEST(XYPlot, DifferentPlotDoesNotMatchBaseline) {
+  forgetDisplay();
+  PlotSpec spec = basicSpec();
+  for (double& y : spec.series[1].y) y *= 0.5;
+  const auto png = scratchFolder() / "changed.png";
+  writePlotPng(spec, png);
+  const double difference = imageDifference(png, kBaselineDir / "xyplot_basic.png");
+  std::cout << "difference of a changed plot from the baseline: " << difference << "\n";
+  EXPECT_GT(difference, 2.0 * kBaselineTolerance);
+}
+
+TEST(XYPlot, LogYPlotRendersAtRequestedSize) {
+  forgetDisplay();
+  PlotSpec spec;
+  spec.title = "exponential on a log axis";
+  spec.xLabel = "t (s)";
+  spec.yLabel = "e^t";
+  spec.widthPx = 640;
+  spec.heightPx = 480;
+  PlotSeries s;
+  s.name = "exp";
+  for (int i = 0; i <= 20; ++i) {
+    s.x.push_back(0.5 * i);
+    s.y.push_back(std::exp(0.5 * i));
+  }
+  spec.series = {s};
+  const auto dir = scratchFolder();
+  spec.logY = true;
+  writePlotPng(spec, dir / "log.png");
+  expectNotBlank(dir / "log.png", 640, 480);
+  // On a log axis e^t is a straight line, so the picture must differ from the linear-axis one.
+  spec.logY = false;
+  writePlotPng(spec, dir / "linear.png");
+  EXPECT_GT(imageDifference(dir / "log.png", dir / "linear.png"), kBaselineTolerance);
+}
+
+TEST(XYPlot, AxisLimitsAndOneSidedLimitsRender) {
+  forgetDisplay();
+  PlotSpec spec = basicSpec();
+  spec.logX = true;
+  spec.series[0].x.erase(spec.series[0].x.begin()); // x = 0 has no place on a log axis
+  spec.series[0].y.erase(spec.series[0].y.begin());
+  spec.series[1].x.erase(spec.series[1].x.begin());
+  spec.series[1].y.erase(spec.series[1].y.begin());
+  spec.xMin = 0.1;
+  spec.yMax = 150.0;
+  const auto png = scratchFolder() / "limits.png";
+  writePlotPng(spec, png);
+  expectNotBlank(png, 900, 650);
+}
+
+TEST(XYPlot, BadSpecsThrowAndLeaveNoFile) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  const auto png = dir / "bad.png";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+
+  auto expectRejected = [&](const PlotSpec& spec, const char* what) {
+    EXPECT_THROW(writePlotPng(spec, png), std::invalid_argument) << what;
+    EXPECT_TRUE(folderIsEmpty(dir)) << what << ": something was left in " << dir;
+  };
+
+  PlotSpec mismatched = basicSpec();
+  mismatched.series[1].y.pop_back();
+  expectRejected(mismatched, "x and y of different lengths");
+
+  PlotSpec withNan = basicSpec();
+  withNan.series[0].y[3] = nan;
+  expectRejected(withNan, "NaN in y");
+
+  PlotSpec withInf = basicSpec();
+  withInf.series[1].x[2] = std::numeric_limits<double>::infinity();
+  expectRejected(withInf, "infinity in x");
+
+  PlotSpec zeroOnLog = basicSpec();
+  zeroOnLog.logY = true; // y = x^2 starts at 0
+  expectRejected(zeroOnLog, "zero on a log axis");
+
+  PlotSpec noSeries = basicSpec();
+  noSeries.series.clear();
+  expectRejected(noSeries, "no series");
+
+  PlotSpec emptySeries = basicSpec();
+  emptySeries.series[1].x.clear();
+  emptySeries.series[1].y.clear();
+  expectRejected(emptySeries, "series without points");
+
+  PlotSpec emptyRange = basicSpec();
+  emptyRange.xMin = 20.0; // above every x, and no xMax
+  expectRejected(emptyRange, "empty axis range");
+
+  // The message names the series and the fault in one line.
+  try {
+    writePlotPng(zeroOnLog, png);
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("x^2"), std::string::npos) << message;
+    EXPECT_NE(message.find("logarithmic"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}
+
+TEST(XYPlot, MissingFolderThrowsWithoutCreatingIt) {
+  forgetDisplay();
+  const auto dir = scratchFolder() / "does-not-exist";
+  EXPECT_THROW(writePlotPng(basicSpec(), dir / "plot.png"), std::runtime_error);
+  EXPECT_FALSE(std::filesystem::exists(dir));
+}
