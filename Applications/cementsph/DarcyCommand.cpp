@@ -105,7 +105,11 @@ int runDarcy(const DarcyOptions& o) {
   const std::filesystem::path csvPath = std::filesystem::path(o.out) / "permeability.csv";
   app::writeFileAtomically(csvPath, csv.str());
   std::cout << "wrote " << csvPath.string() << "\n";
-  if (!o.noPlot) app::writeDarcyPlot(results, std::filesystem::path(o.out) / "permeability.png");
+  if (!o.noPlot) {
+    const std::filesystem::path png = std::filesystem::path(o.out) / "permeability.png";
+    app::writeDarcyPlot(results, png);
+    std::cout << "wrote " << png.string() << "\n";
+  }
   bool allConverged = true;
   for (const DarcyResult& r : results) allConverged = allConverged && r.converged;
   return allConverged ? 0 : 3;
