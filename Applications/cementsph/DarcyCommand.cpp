@@ -82,7 +82,7 @@ int runDarcy(const DarcyOptions& o) {
         c.viscosity = mu;
         c.seed = o.seed;
         c.bodyForces = o.bodyForces;
-        DarcyResult r = bench.run(c);
+        DarcyResult r = bench.run(c, [](const std::string& line) { std::cerr << "  " << line << "\n"; });
         ++done;
         std::cerr << "[" << done << "/" << total << "] porosity " << phi << ", spacing " << spacing << " mm, "
                   << mu << " Pa.s: k/d^2 " << std::setprecision(4) << r.dimensionlessPermeability << ", R^2 "
