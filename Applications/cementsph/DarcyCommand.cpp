@@ -68,8 +68,24 @@ int runDarcy(const DarcyOptions& o) {
   std::cerr << "cementsph darcy: preset " << preset.name << " (h/d " << preset.hOverD << ", "
             << toString(model.integrator) << ", Cf " << model.dragCoefficient << "), " << o.lattice << "^3 lattice, "
             << omp_get_max_threads() << " threads\n";
-  DarcyBenchmark bench(model, preset.hOverD, criteria);
+  std::filesystem::create_directories(o.out);
   std::vector<DarcyResult> results;
+  // The CSV is rewritten (atomically) after every case, so a long sweep keeps what it has done.
+  const std::filesystem::path csvPath = std::filesystem::path(o.out) / "permeability.csv";
+  auto writeCsv = [&] {
+    std::ostringstream csv;
+    csv << "porosity,spacing_mm,viscosity_pa_s,slope_s,r2,permeability_m2,dimensionless_permeability,"
+           "kozeny_carman_dimensionless,steps,wall_s,converged,intercept_m_per_s,h_over_d,drag_coefficient,integrator\n";
+    csv << std::setprecision(8);
+    for (const DarcyResult& r : results)
+      csv << r.porosity << ',' << r.input.spacing * 1e3 << ',' << r.input.viscosity << ',' << r.slope << ',' << r.r2
+          << ',' << r.permeability << ',' << r.dimensionlessPermeability << ','
+          << kozenyCarmanDimensionless(r.porosity) << ',' << r.steps << ',' << r.wallSeconds << ','
+          << (r.converged ? 1 : 0) << ',' << r.intercept << ',' << preset.hOverD << ',' << model.dragCoefficient
+          << ',' << toString(model.integrator) << '\n';
+    app::writeFileAtomically(csvPath, csv.str());
+  };
+  DarcyBenchmark bench(model, preset.hOverD, criteria);
   const std::size_t total = o.porosities.size() * o.spacingsMm.size() * o.viscositiesPaS.size();
   std::size_t done = 0;
   for (double spacing : o.spacingsMm)
@@ -89,22 +105,10 @@ int runDarcy(const DarcyOptions& o) {
                   << std::setprecision(6) << r.r2 << ", " << r.steps << " steps, " << std::setprecision(3)
                   << r.wallSeconds << " s" << (r.converged ? "" : "  (NOT converged: raise the step cap)") << "\n";
         results.push_back(std::move(r));
+        writeCsv();
       }
-
-  std::filesystem::create_directories(o.out);
-  std::ostringstream csv;
-  csv << "porosity,spacing_mm,viscosity_pa_s,slope_s,r2,permeability_m2,dimensionless_permeability,"
-         "kozeny_carman_dimensionless,steps,wall_s,converged,intercept_m_per_s,h_over_d,drag_coefficient,integrator\n";
-  csv << std::setprecision(8);
-  for (const DarcyResult& r : results)
-    csv << r.porosity << ',' << r.input.spacing * 1e3 << ',' << r.input.viscosity << ',' << r.slope << ',' << r.r2
-        << ',' << r.permeability << ',' << r.dimensionlessPermeability << ','
-        << kozenyCarmanDimensionless(r.porosity) << ',' << r.steps << ',' << r.wallSeconds << ','
-        << (r.converged ? 1 : 0) << ',' << r.intercept << ',' << preset.hOverD << ',' << model.dragCoefficient
-        << ',' << toString(model.integrator) << '\n';
-  const std::filesystem::path csvPath = std::filesystem::path(o.out) / "permeability.csv";
-  app::writeFileAtomically(csvPath, csv.str());
   std::cout << "wrote " << csvPath.string() << "\n";
+
   if (!o.noPlot) {
     const std::filesystem::path png = std::filesystem::path(o.out) / "permeability.png";
     app::writeDarcyPlot(results, png);

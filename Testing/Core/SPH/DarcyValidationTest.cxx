@@ -10,9 +10,10 @@ using namespace cementsph::sph;
 namespace {
 
 DarcyResult runCase(double porosity, double spacingMm, double viscosity, Integrator integrator = Integrator::Overdamped,
-                    std::vector<double> forces = {}) {
+                    std::vector<double> forces = {}, double dragCoefficient = 0) {
   ModelPreset preset = modelPreset("default");
   preset.model.integrator = integrator;
+  if (dragCoefficient > 0) preset.model.dragCoefficient = dragCoefficient;
   DarcyBenchmark bench(preset.model, preset.hOverD);
   DarcyCase c;
   c.latticeSize = 10;
@@ -62,13 +63,29 @@ TEST_F(DarcyValidation, PermeabilityRisesWithPorosity) {
   EXPECT_LT(open.dimensionlessPermeability, 1.0);
 }
 
+TEST(DarcyCalibration, PermeabilityScalesAsOneOverDragCoefficient) {
+  // Overdamped: dt ~ gamma ~ Cf and u ~ 1/Cf, so the same travel per step and k ~ 1/Cf exactly. This
+  // is what lets one Cf = 1 sweep calibrate Cf (VALIDATION.md).
+  ModelPreset preset = modelPreset("default");
+  DarcyCase c;
+  c.latticeSize = 8;
+  c.porosity = 0.8;
+  c.spacing = 1e-3;
+  c.viscosity = 10.0;
+  c.bodyForces = {2.0, 1.0};
+  const DarcyResult base = DarcyBenchmark(preset.model, preset.hOverD).run(c);
+  preset.model.dragCoefficient *= 2.5;
+  const DarcyResult stiff = DarcyBenchmark(preset.model, preset.hOverD).run(c);
+  EXPECT_NEAR(stiff.permeability / base.permeability, 1.0 / 2.5, 1e-6);
+}
+
 TEST(DarcyIntegrators, OverdampedMatchesCentralDifference) {
   // Same medium, same forces: the paper's integrator (Eq. 8, implicit drag) and the overdamped limit.
-  // At 1 Pa.s the central difference needs ~2.4k steps per spacing travelled (it is bound by the
-  // acoustic step); at cement viscosities it would need 10-100x more, the overdamped one the same.
+  // At 1 Pa.s and Cf = 1 the central difference needs ~5k steps per spacing travelled (it is bound by
+  // the acoustic step); its step count grows with mu Cf, the overdamped one's does not.
   const std::vector<double> forces{2.0, 1.0};
-  const DarcyResult od = runCase(0.8, 1.0, 1.0, Integrator::Overdamped, forces);
-  const DarcyResult cd = runCase(0.8, 1.0, 1.0, Integrator::CentralDifference, forces);
+  const DarcyResult od = runCase(0.8, 1.0, 1.0, Integrator::Overdamped, forces, 1.0);
+  const DarcyResult cd = runCase(0.8, 1.0, 1.0, Integrator::CentralDifference, forces, 1.0);
   ASSERT_TRUE(od.converged);
   ASSERT_TRUE(cd.converged);
   EXPECT_NEAR(od.permeability / cd.permeability, 1.0, 0.02); // issue: within 2 %
