@@ -249,3 +249,39 @@ TEST(SPHSimulation, ResultsAreDeterministicForAGivenThreadCount) {
   };
   EXPECT_EQ(run(), run()); // bitwise
 }
+
+TEST(SPHSimulationBoundaries, OpenSideRemovesAndCountsEscapedParticles) {
+  const double d = 1e-3;
+  ModelParameters m = baseModel(d);
+  m.integrator = Integrator::Overdamped;
+  m.bodyForce = Eigen::Vector3d(50.0, 0, 0);
+  Domain domain;
+  domain.upper = Eigen::Vector3d(10 * d, 10 * d, 10 * d);
+  Simulation sim(m, domain);
+  const double mass = m.restDensity * d * d * d;
+  sim.addFluidParticle(Eigen::Vector3d(9.9 * d, 5 * d, 5 * d), Eigen::Vector3d::Zero(), mass); // leaves
+  sim.addFluidParticle(Eigen::Vector3d(2 * d, 5 * d, 5 * d), Eigen::Vector3d::Zero(), mass);   // stays
+  // The leaver moves 0.05 h per step at most: it is out within 0.1 d / (0.05 d) + 1 = 3 steps.
+  for (int s = 0; s < 3; ++s) sim.step();
+  EXPECT_EQ(sim.escapedCount(), 1u);
+  ASSERT_EQ(sim.fluid().size(), 1u);
+  EXPECT_EQ(sim.fluid().id[0], 1u);
+}
+
+TEST(SPHSimulationBoundaries, PeriodicSideReentersWithSameVelocity) {
+  const double d = 1e-3;
+  ModelParameters m = baseModel(d);
+  m.viscosityModel = ViscosityModel::None;
+  m.integrator = Integrator::Explicit;
+  Domain domain;
+  domain.upper.setConstant(10 * d);
+  domain.periodic = {true, true, true};
+  Simulation sim(m, domain);
+  const Eigen::Vector3d v(0.2, 0, 0);
+  sim.addFluidParticle(Eigen::Vector3d(9.97 * d, 5 * d, 5 * d), v, m.restDensity * d * d * d);
+  const double dt = sim.step(); // alone: no force, so it drifts at v
+  EXPECT_EQ(sim.escapedCount(), 0u);
+  ASSERT_GT(9.97 * d + v.x() * dt, 10 * d); // it did cross
+  EXPECT_NEAR(sim.fluid().x[0], 9.97 * d + v.x() * dt - 10 * d, 1e-15);
+  EXPECT_EQ(sim.fluid().vx[0], v.x());
+}

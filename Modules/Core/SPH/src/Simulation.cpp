@@ -277,7 +277,9 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
   const double twoMu = 2.0 * parameters_.viscosity;
   const Eigen::Vector3d g = parameters_.bodyForce;
   // p / rho^2 of each particle, used by every pair (Eq. 5).
-  std::vector<double> pr2(n);
+  pressureOverDensity2_.resize(n);
+  double* pr2 = pressureOverDensity2_.data();
+#pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) pr2[i] = fluid_.pressure[i] / (fluid_.density[i] * fluid_.density[i]);
   const double fixedPr2 = fixed_.pressure / (fixed_.density * fixed_.density);
   const double* X = fluid_.x.data(); const double* Y = fluid_.y.data(); const double* Z = fluid_.z.data();
@@ -343,16 +345,20 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
 // ------------------------------------------------------------------------------------------------
 
 double Simulation::maxDragRate() const {
-  double g = 0;
   if (parameters_.viscosityModel != ViscosityModel::Drag) return 0;
-  for (std::size_t i = 0; i < fluid_.size(); ++i) g = std::max(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
+  double g = 0;
+  const std::size_t n = fluid_.size();
+#pragma omp parallel for schedule(static) reduction(max : g)
+  for (std::size_t i = 0; i < n; ++i) g = std::max(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
   return g;
 }
 
 double Simulation::minDragRate() const {
-  double g = kInf;
   if (parameters_.viscosityModel != ViscosityModel::Drag) return 0;
-  for (std::size_t i = 0; i < fluid_.size(); ++i) g = std::min(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
+  double g = kInf;
+  const std::size_t n = fluid_.size();
+#pragma omp parallel for schedule(static) reduction(min : g)
+  for (std::size_t i = 0; i < n; ++i) g = std::min(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
   return g;
 }
 
@@ -361,13 +367,13 @@ StepLimits Simulation::currentLimits() const {
   const double h = p.smoothingLength;
   StepLimits l{kInf, kInf, kInf, kInf, kInf, kInf};
   double amax2 = 0, vmax2 = 0;
-  for (std::size_t i = 0; i < fluid_.size(); ++i)
-    amax2 = std::max(amax2, fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i]);
+  const std::size_t n = fluid_.size();
   if (p.integrator == Integrator::Overdamped) {
     const double gmin = minDragRate();
     l.overdamped = p.overdampedStability * gmin * h * h / (p.soundSpeed * p.soundSpeed);
     // v = a / gamma; the fastest particle bounds the step for accuracy.
-    for (std::size_t i = 0; i < fluid_.size(); ++i) {
+#pragma omp parallel for schedule(static) reduction(max : vmax2)
+    for (std::size_t i = 0; i < n; ++i) {
       const double g = p.dragRate(fluid_.mass[i], fluid_.density[i]);
       const double a2 = fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i];
       vmax2 = std::max(vmax2, a2 / (g * g));
@@ -376,6 +382,9 @@ StepLimits Simulation::currentLimits() const {
     return l;
   }
   l.acoustic = p.acousticCourant * h / p.soundSpeed;
+#pragma omp parallel for schedule(static) reduction(max : amax2)
+  for (std::size_t i = 0; i < n; ++i)
+    amax2 = std::max(amax2, fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i]);
   if (amax2 > 0) l.force = p.forceCourant * std::sqrt(h / std::sqrt(amax2));
   if (p.integrator == Integrator::Explicit) {
     if (p.viscosityModel == ViscosityModel::Morris) l.viscous = p.viscousNumber * h * h * p.restDensity / p.viscosity;

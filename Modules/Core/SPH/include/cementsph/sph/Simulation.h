@@ -122,6 +122,7 @@ private:
   std::uint64_t escaped_ = 0;
   StepStatistics statistics_;
   std::vector<std::string> warnings_;
+  std::vector<double> pressureOverDensity2_; // p / rho^2 per fluid particle, scratch of the force pass
 };
 
 } // namespace cementsph::sph
