@@ -78,6 +78,7 @@ TEST(SPHSimulation, DragPermeabilityAtPorosityOneMatchesOracle) {
       const double densityRatio = hOverD == 0.5 ? 8.0 / kPi : 1.0;
       const double k0 = h * h * h * h * h / (m.dragCoefficient * d * d * d) * densityRatio * densityRatio;
       EXPECT_NEAR(k / k0, 1.0, 0.01) << toString(integrator) << " h/d " << hOverD;
+      std::cout << toString(integrator) << ", h/d " << hOverD << ": k / k0 = " << k / k0 << "\n";
     }
   }
 }
