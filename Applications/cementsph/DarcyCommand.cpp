@@ -32,7 +32,8 @@ struct DarcyOptions {
   double hOverD = 0, dragCoefficient = 0, soundSpeed = 0, timeStep = 0;
   int lattice = 25, threads = 0;
   std::uint64_t seed = 1;
-  double tolerance = 2e-3;
+  double tolerance = 1e-2;
+  std::uint64_t maxSteps = 400000;
   bool clampTimeStep = false, noPlot = false;
 };
 
@@ -64,6 +65,7 @@ int runDarcy(const DarcyOptions& o) {
   model.stepLimitPolicy = o.clampTimeStep ? StepLimitPolicy::Clamp : StepLimitPolicy::Refuse;
   SteadyStateCriteria criteria;
   criteria.relativeTolerance = o.tolerance;
+  criteria.maxSteps = o.maxSteps;
 
   std::cerr << "cementsph darcy: preset " << preset.name << " (h/d " << preset.hOverD << ", "
             << toString(model.integrator) << ", Cf " << model.dragCoefficient << "), " << o.lattice << "^3 lattice, "
@@ -139,6 +141,8 @@ app::CommandRunner setupDarcy(CLI::App& sub) {
   sub.add_option("--lattice", o->lattice, "particles per side of the cubic lattice")->capture_default_str();
   sub.add_option("--seed", o->seed, "random seed for the fixed sites")->capture_default_str();
   sub.add_option("--steady-tolerance", o->tolerance, "relative change between windows that counts as steady")
+      ->capture_default_str();
+  sub.add_option("--max-steps-per-force", o->maxSteps, "step cap for one body force (not converged past it)")
       ->capture_default_str();
   sub.add_option("--threads", o->threads, "OpenMP threads (default: all cores)");
   sub.add_flag("--no-plot", o->noPlot, "write the CSV only");
