@@ -61,6 +61,7 @@ void writeDarcyPlot(const std::vector<sph::DarcyResult>& results, const std::fil
   std::size_t k = 0;
   for (auto& [key, series] : bySet) {
     series.rgb = palette[k++ % palette.size()];
+    if (series.x.size() < 2) series.style = PlotSeries::Style::Points; // a line needs two points
     spec.series.push_back(series);
   }
   // Kozeny-Carman with the spacing as grain diameter, over the same porosity range (phi < 1).

@@ -2,6 +2,7 @@
 
 #include "cementsph/sph/Simulation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -99,6 +100,27 @@ DarcyResult DarcyBenchmark::run(const DarcyCase& c, const Progress& progress) co
     all = sumAll / double(f.size());
   };
 
+  // Fewest steps a spacing of travel can take: free drag-limited flow (u = F / gamma) is the fastest,
+  // and the densest particle has the weakest drag.
+  {
+    sim.updateDensityAndPressure();
+    const std::vector<double>& rho = sim.fluid().density;
+    const double densest = *std::max_element(rho.begin(), rho.end());
+    const double weakestDrag = model.viscosityModel == ViscosityModel::Drag ? model.dragRate(mass, densest) : 0.0;
+    sim.updateAccelerations();
+    const double dt = sim.nextTimeStep();
+    const double fMin = *std::min_element(forces.begin(), forces.end());
+    if (weakestDrag > 0 && dt > 0 && progress) {
+      const double stepsPerSpacing = c.spacing * weakestDrag / (fMin * dt);
+      if (stepsPerSpacing * 2.0 * criteria_.windowTravel > double(criteria_.maxSteps)) {
+        std::ostringstream s;
+        s << "warning: the " << toString(model.integrator) << " integrator needs at least " << std::llround(stepsPerSpacing)
+          << " steps per spacing travelled here (dt " << dt << " s), more than the step cap allows: this case will "
+          << "stop unconverged; the overdamped integrator takes the same physics in far fewer steps";
+        progress(s.str());
+      }
+    }
+  }
   result.converged = true;
   for (double force : forces) {
     sim.setBodyForce(Eigen::Vector3d(force, 0, 0));
