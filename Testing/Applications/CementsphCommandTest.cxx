@@ -1,0 +1,89 @@
+// The cementsph program as a user meets it: help, bad input (one clear line, non-zero exit, no output
+// files), and a small real `darcy` run whose CSV has the documented columns.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int status;
+  std::string output; // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string command = std::string(CEMENTSPH_EXECUTABLE) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
+  const int raw = pclose(pipe);
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, out};
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / name;
+  fs::remove_all(p);
+  return p;
+}
+
+} // namespace
+
+TEST(CementsphCommand, HelpListsSubcommands) {
+  const Result r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.output.find("darcy"), std::string::npos) << r.output;
+  const Result d = run("darcy --help");
+  EXPECT_EQ(d.status, 0);
+  EXPECT_NE(d.output.find("--spacings-mm"), std::string::npos) << d.output;
+}
+
+TEST(CementsphCommand, BadPorosityIsOneClearLineAndNoOutput) {
+  const fs::path out = scratch("bad-porosity");
+  const Result r = run("darcy --porosities 0 --out " + out.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--porosities"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(out / "permeability.csv"));
+}
+
+TEST(CementsphCommand, UnknownPresetIsAClearError) {
+  const fs::path out = scratch("bad-preset");
+  const Result r = run("darcy --preset nonsense --out " + out.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("unknown preset 'nonsense'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "permeability.csv"));
+}
+
+TEST(CementsphCommand, SmallDarcyRunWritesCsvAndPlot) {
+  const fs::path out = scratch("darcy-small");
+  const Result r = run("darcy --lattice 6 --porosities 0.9 --spacings-mm 1 --viscosities-pa-s 10 --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream csv(out / "permeability.csv");
+  ASSERT_TRUE(csv) << r.output;
+  std::string header, row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  for (const char* column : {"porosity", "spacing_mm", "viscosity_pa_s", "slope", "r2", "permeability_m2",
+                             "dimensionless_permeability", "steps", "wall_s"})
+    EXPECT_NE(header.find(column), std::string::npos) << column;
+  EXPECT_FALSE(row.empty());
+  // porosity 1 - round(0.1 * 216) / 216 = 0.8981...
+  EXPECT_EQ(row.rfind("0.89814815,1,10,", 0), 0u) << row;
+  std::ifstream png(out / "permeability.png", std::ios::binary);
+  ASSERT_TRUE(png);
+  char magic[8] = {};
+  png.read(magic, 8);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 2); // no temporaries
+}
