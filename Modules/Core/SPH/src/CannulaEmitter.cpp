@@ -3,6 +3,8 @@
 #include "cementsph/sph/Kernels.h"
 #include "cementsph/sph/Simulation.h"
 
+#include <Eigen/Geometry> // cross product
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -44,8 +46,7 @@ CannulaEmitter::CannulaEmitter(const CannulaSpec& spec) : spec_(spec) {
   if (spec.buildWall) {
     if (!(std::isfinite(spec.wallLength) && spec.wallLength >= 0))
       throw std::invalid_argument("cannula: wall length must be zero or positive");
-    if (spec.wallLayers < 0 || spec.plugLayers < 0)
-      throw std::invalid_argument("cannula: wall and plug layer counts must be zero or positive");
+    if (spec.wallLayers < 0) throw std::invalid_argument("cannula: wall layer count must be zero or positive");
   }
   axis_ = spec.direction.normalized();
   // An orthonormal frame (e1, e2, axis): start from the coordinate axis least aligned with the cannula.
@@ -71,13 +72,13 @@ double CannulaEmitter::boreArea() const { return 0.25 * kPi * spec_.innerDiamete
 std::vector<Eigen::Vector3d> CannulaEmitter::wallPositions() const {
   std::vector<Eigen::Vector3d> out;
   if (!spec_.buildWall) return out;
-  const double d = spec_.spacing;
-  const int axial = static_cast<int>(std::floor(spec_.wallLength / d + 1e-9));
+  const double s = wallSpacing();
+  const int axial = static_cast<int>(std::floor(spec_.wallLength / s + 1e-9));
   for (int k = 0; k < spec_.wallLayers; ++k) {
-    const double radius = 0.5 * spec_.innerDiameter + 0.5 * d + k * d;
-    const int around = std::max(6, static_cast<int>(std::lround(2.0 * kPi * radius / d)));
+    const double radius = 0.5 * spec_.innerDiameter + 0.5 * s + k * s;
+    const int around = std::max(6, static_cast<int>(std::lround(2.0 * kPi * radius / s)));
     for (int j = 0; j <= axial; ++j) {
-      const Eigen::Vector3d centre = spec_.tip - (j * d) * axis_;
+      const Eigen::Vector3d centre = spec_.tip - (j * s) * axis_;
       const double twist = (j % 2) * 0.5; // stagger alternate rings by half a pitch
       for (int a = 0; a < around; ++a) {
         const double phi = 2.0 * kPi * (a + twist) / around;
@@ -85,8 +86,14 @@ std::vector<Eigen::Vector3d> CannulaEmitter::wallPositions() const {
       }
     }
   }
-  for (int j = 1; j <= spec_.plugLayers; ++j)
-    for (const Eigen::Vector3d& p : pattern_) out.push_back(p - (j * d) * axis_);
+  // The bore behind the tip is solid (the cement column there is not simulated): square-lattice layers
+  // reaching the first wall ring, from one fluid spacing behind the tip to the end of the wall.
+  if (spec_.fillBore) {
+    const std::vector<Eigen::Vector2d> disc = discPoints(0.5 * spec_.innerDiameter + 0.25 * s, s, 0.0);
+    for (int j = 0; j * s <= spec_.wallLength - spec_.spacing + 1e-12; ++j)
+      for (const Eigen::Vector2d& p : disc)
+        out.push_back(spec_.tip - (spec_.spacing + j * s) * axis_ + p.x() * e1_ + p.y() * e2_);
+  }
   return out;
 }
 
@@ -94,7 +101,7 @@ std::size_t CannulaEmitter::addWall(Simulation& sim) const {
   std::size_t added = 0;
   for (const Eigen::Vector3d& p : wallPositions())
     if (sim.domain().contains(p)) {
-      sim.addFixedParticle(p, particleMass());
+      sim.addFixedParticle(p, wallParticleMass());
       ++added;
     }
   return added;
@@ -114,7 +121,13 @@ std::size_t CannulaEmitter::emit(Simulation& sim) {
   const std::size_t before = emitted_;
   const Eigen::Vector3d velocity = exitSpeed() * axis_;
   for (; emitted_ < due; ++emitted_) {
-    const Eigen::Vector3d& p = pattern_[emitted_ % pattern_.size()];
+    // Particle k was due at t_k = t0 + k d^3 / Q; it goes where it would be had it left its slot then at v0
+    // (never more than one layer ahead). This keeps the position consistent with the exit speed whatever
+    // the step, and keeps a layer from lying in one plane (with the overdamped integrator a planar layer in
+    // empty space would stay planar: nothing pushes it off the plane).
+    const double dueTime = spec_.startTime + double(emitted_) * particleInterval();
+    const double ahead = std::min(exitSpeed() * std::max(0.0, sim.time() - dueTime), layerThickness());
+    const Eigen::Vector3d p = pattern_[emitted_ % pattern_.size()] + ahead * axis_;
     ids_.push_back(sim.addFluidParticle(p, velocity, particleMass()));
   }
   return emitted_ - before;

@@ -3,6 +3,8 @@
 #include "cementsph/sph/Kernels.h"
 #include "cementsph/sph/Simulation.h"
 
+#include <Eigen/Geometry> // cross product
+
 #include <cmath>
 #include <stdexcept>
 

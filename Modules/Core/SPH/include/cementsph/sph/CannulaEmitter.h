@@ -18,8 +18,13 @@
 //  * Velocity v0 along the axis (used by the central-difference and explicit integrators; the overdamped one
 //    sets v = a / gamma, so there the cement is pushed out by the pressure of the particles behind it).
 //  * Optional wall: fixed particles (mass rho0 d^3, like the fixed particles of the paper) on rings of radius
-//    D/2 + d/2 + k d (k < wallLayers) from the tip plane back a length L, plus plugLayers disc layers filling
-//    the bore at 1..plugLayers spacings behind the tip so cement cannot flow back into the cannula.
+//    D/2 + s/2 + k s (k < wallLayers), one ring every s from the tip plane back a length L, and the bore from
+//    one fluid spacing d behind the tip to L filled with fixed particles (square lattice of spacing s), so
+//    cement cannot flow back into the cannula. s = d/2 by default. Fixed particles of mass rho0 s^3 (the
+//    paper's rho0 V) are permeable to this cloud: its model pressure (~1.5-2.5 kPa at 100-400 Pa.s, 0.05 ml/s)
+//    exceeds rho0 cs^2 = 1.18 kPa, and cement was pushed 5-6 mm into the filled bore. The wall mass factor
+//    (default 8, measured: nothing past the bore face at 100 and 400 Pa.s; factor 4 leaked at 400 Pa.s)
+//    makes the wall stiffer than the cloud. Cement may still creep back along the outside of the shaft.
 //  * At most one particle per step: run the simulation with ModelParameters::maxTimeStep = maxTimeStep().
 #pragma once
 
@@ -46,7 +51,9 @@ struct CannulaSpec {
   bool buildWall = true;
   double wallLength = 10e-3;                               // L [m] behind the tip
   int wallLayers = 2;                                      // rings of radius D/2 + d/2 + k d
-  int plugLayers = 2;                                      // bore layers behind the tip
+  bool fillBore = true;                                    // bore behind the tip filled with fixed particles
+  double wallSpacingFraction = 0.5;                        // wall particle spacing s over d
+  double wallMassFactor = 8.0;                             // wall particle mass = factor rho0 s^3 (see above)
 };
 
 class CannulaEmitter {
@@ -63,6 +70,11 @@ public:
   double particleMass() const { return spec_.restDensity * particleVolume(); }
   double layerVolume() const { return double(pattern_.size()) * particleVolume(); }
   double boreArea() const;
+  double wallSpacing() const { return spec_.wallSpacingFraction * spec_.spacing; }
+  double wallParticleMass() const {
+    const double s = wallSpacing();
+    return spec_.wallMassFactor * spec_.restDensity * s * s * s;
+  }
   double layerThickness() const { return layerVolume() / boreArea(); }
   double exitSpeed() const { return spec_.flowRate / boreArea(); } // v0 = Q / (pi D^2 / 4)
   double particleInterval() const { return particleVolume() / spec_.flowRate; } // d^3 / Q [s]
@@ -70,11 +82,11 @@ public:
   double maxTimeStep() const { return particleInterval(); }
   std::size_t totalParticles() const { return totalParticles_; }
 
-  // Adds the wall and plug as fixed particles (nothing if buildWall is off); returns how many. Call before
+  // Adds the wall and the filled bore as fixed particles (nothing if buildWall is off); returns how many. Call before
   // the first step. Wall particles outside the simulation domain are skipped (counted in the return value only
   // when added).
   std::size_t addWall(Simulation& sim) const;
-  // The wall and plug positions (empty if buildWall is off).
+  // The wall and filled-bore positions (empty if buildWall is off).
   std::vector<Eigen::Vector3d> wallPositions() const;
 
   // Number of particles due by simulation time t: min(N_total, floor(Q (t - t0) / d^3) + 1), 0 before t0.
