@@ -35,7 +35,7 @@ struct InjectionScene {
 // Cannula along +z with its tip at the origin, in an open box of half-width `halfWidth`.
 inline InjectionScene makeInjectionScene(double viscosityPaS, double flowRate, double totalVolume, bool wall,
                                          double halfWidth = 20e-3, double d = 1.14e-3, double D = 2.388e-3,
-                                         double wallMassFactor = 1.0) {
+                                         double wallMassFactor = CannulaSpec{}.wallMassFactor) {
   const ModelPreset preset = modelPreset("default");
   CannulaSpec spec;
   spec.tip = Eigen::Vector3d::Zero();

@@ -50,7 +50,7 @@ struct CannulaSpec {
   // Wall (fixed particles); off for injection into empty space without a cannula.
   bool buildWall = true;
   double wallLength = 10e-3;                               // L [m] behind the tip
-  int wallLayers = 2;                                      // rings of radius D/2 + d/2 + k d
+  int wallLayers = 2;                                      // rings of radius D/2 + s/2 + k s
   bool fillBore = true;                                    // bore behind the tip filled with fixed particles
   double wallSpacingFraction = 0.5;                        // wall particle spacing s over d
   double wallMassFactor = 8.0;                             // wall particle mass = factor rho0 s^3 (see above)
