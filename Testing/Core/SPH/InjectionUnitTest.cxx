@@ -137,6 +137,25 @@ TEST(CannulaEmitter, DueCountIsVolumeExact) {
   EXPECT_EQ(e.dueCount(1e4), e.totalParticles());
 }
 
+TEST(CannulaEmitter, EmitsAtTheTipWithTheExitVelocity) {
+  CannulaSpec spec;
+  spec.direction = Eigen::Vector3d(0, -1, 0);
+  spec.buildWall = false;
+  CannulaEmitter e(spec);
+  ModelParameters m = baseModel(spec.spacing);
+  Domain domain;
+  domain.lower.setConstant(-10e-3);
+  domain.upper.setConstant(10e-3);
+  Simulation sim(m, domain);
+  EXPECT_EQ(e.emit(sim), 1u); // t = 0: particle 0 is due
+  EXPECT_EQ(e.emit(sim), 0u); // nothing more until Q t reaches d^3
+  const FluidParticles& f = sim.fluid();
+  EXPECT_LT((f.position(0) - e.layerPattern()[0]).norm(), 1e-15);
+  EXPECT_LT((f.velocity(0) - e.exitSpeed() * spec.direction).norm(), 1e-15); // v0 = Q / (pi D^2 / 4) along the axis
+  EXPECT_DOUBLE_EQ(f.mass[0], spec.restDensity * std::pow(spec.spacing, 3));
+  EXPECT_EQ(e.emittedIds().size(), 1u);
+}
+
 TEST(CannulaEmitter, RejectsBadSpecs) {
   CannulaSpec s;
   s.innerDiameter = 0;
