@@ -8,6 +8,7 @@
 #include "cementsph/sph/ParticleVoxeliser.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <iostream>
@@ -17,6 +18,13 @@ using namespace cementsph::sph;
 using namespace cementsph::sph::testing;
 
 namespace {
+// These scenes hold at most ~700 particles: one thread is fastest, and on a machine whose cores are busy
+// with other runs OpenMP barriers made the wall test take 59 s instead of ~1 s with two threads.
+const int kOneThread = [] {
+  omp_set_num_threads(1);
+  return 1;
+}();
+
 constexpr double kMl = 1e-6;
 constexpr double kQ = 0.05 * kMl; // m^3/s
 constexpr double kD = 1.14e-3;
