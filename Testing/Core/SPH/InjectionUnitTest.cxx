@@ -212,8 +212,13 @@ TEST(TipPressureProbe, PointDensityEqualsParticleDensityAtAParticle) {
     EXPECT_NEAR(TipPressureProbe::densityAt(sim, sim.fluid().position(i)) / sim.fluid().density[i], 1.0, 1e-12);
     EXPECT_NEAR(TipPressureProbe::pressureAt(sim, sim.fluid().position(i)), sim.fluid().pressure[i], 1e-9);
   }
-  TipPressureProbe probe(TipPressureProbe::ringAroundTip(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 1e-3));
+  // The probe's mean (fixed share cached) equals the mean of the brute-force point pressures.
+  TipPressureProbe probe(TipPressureProbe::ringAroundTip(Eigen::Vector3d(2.5 * d, 2.5 * d, 2.5 * d), Eigen::Vector3d::UnitZ(), 1e-3));
   EXPECT_EQ(probe.points().size(), 6u);
+  double direct = 0;
+  for (const auto& p : probe.points()) direct += TipPressureProbe::pressureAt(sim, p) / 6.0;
+  EXPECT_NEAR(probe.meanPressure(sim), direct, 1e-9);
+  EXPECT_NEAR(probe.meanPressure(sim), direct, 1e-9); // second call: from the cache
   EXPECT_THROW(probe.baseline(), std::logic_error); // no sample yet
 }
 

@@ -35,18 +35,26 @@ std::vector<Eigen::Vector3d> TipPressureProbe::ringAroundTip(const Eigen::Vector
   return pts;
 }
 
-double TipPressureProbe::densityAt(const Simulation& sim, const Eigen::Vector3d& x) {
-  // Eq. 2 at a point: rho(x) = sum_j m_j W(x - x_j, h), fluid and fixed particles alike.
+namespace {
+// Eq. 2 at a point: rho(x) = sum_j m_j W(x - x_j, h), over the fluid or the fixed particles.
+double fluidDensityAt(const Simulation& sim, const Eigen::Vector3d& x) {
   const CubicSplineKernel W(sim.parameters().smoothingLength);
   const double s2 = W.support() * W.support();
   const FluidParticles& f = sim.fluid();
-  const FixedParticles& s = sim.fixed();
   double rho = 0;
   for (std::size_t j = 0; j < f.size(); ++j) {
     const double dx = x.x() - f.x[j], dy = x.y() - f.y[j], dz = x.z() - f.z[j];
     const double r2 = dx * dx + dy * dy + dz * dz;
     if (r2 < s2) rho += f.mass[j] * W.value(std::sqrt(r2));
   }
+  return rho;
+}
+
+double fixedDensityAt(const Simulation& sim, const Eigen::Vector3d& x) {
+  const CubicSplineKernel W(sim.parameters().smoothingLength);
+  const double s2 = W.support() * W.support();
+  const FixedParticles& s = sim.fixed();
+  double rho = 0;
   for (std::size_t j = 0; j < s.size(); ++j) {
     const double dx = x.x() - s.x[j], dy = x.y() - s.y[j], dz = x.z() - s.z[j];
     const double r2 = dx * dx + dy * dy + dz * dz;
@@ -54,14 +62,28 @@ double TipPressureProbe::densityAt(const Simulation& sim, const Eigen::Vector3d&
   }
   return rho;
 }
+} // namespace
+
+double TipPressureProbe::densityAt(const Simulation& sim, const Eigen::Vector3d& x) {
+  return fluidDensityAt(sim, x) + fixedDensityAt(sim, x); // fluid and fixed particles alike (the paper)
+}
 
 double TipPressureProbe::pressureAt(const Simulation& sim, const Eigen::Vector3d& x) {
   return sim.parameters().pressure(densityAt(sim, x)); // Eq. 6
 }
 
 double TipPressureProbe::meanPressure(const Simulation& sim) const {
+  const double h = sim.parameters().smoothingLength;
+  if (fixedOwner_ != &sim || fixedCount_ != sim.fixed().size() || fixedH_ != h || fixedDensity_.size() != points_.size()) {
+    fixedDensity_.clear();
+    for (const auto& p : points_) fixedDensity_.push_back(fixedDensityAt(sim, p));
+    fixedOwner_ = &sim;
+    fixedCount_ = sim.fixed().size();
+    fixedH_ = h;
+  }
   double sum = 0;
-  for (const auto& p : points_) sum += pressureAt(sim, p);
+  for (std::size_t k = 0; k < points_.size(); ++k)
+    sum += sim.parameters().pressure(fluidDensityAt(sim, points_[k]) + fixedDensity_[k]); // Eq. 6
   return sum / double(points_.size());
 }
 

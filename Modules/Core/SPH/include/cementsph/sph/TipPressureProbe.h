@@ -5,8 +5,9 @@
 //
 // At each probe point x the density is the Eq. 2 summation over fluid and fixed particles,
 // rho(x) = sum_j m_j W(x - x_j, h) (cubic spline, Eq. 10, the simulation's h), and p = cs^2 (rho - rho0)
-// (Eq. 6). A sample is the mean over the points. Brute force over all particles: a handful of points per
-// sample costs a few fluid-particle passes, far less than a step.
+// (Eq. 6). A sample is the mean over the points. Brute force over the fluid particles (a handful of points
+// per sample costs a few fluid-particle passes, less than a step); the fixed particles never move, so their
+// share at each point is summed once and reused while the fixed set keeps its size.
 #pragma once
 
 #include <Eigen/Core>
@@ -51,6 +52,11 @@ private:
   std::vector<Eigen::Vector3d> points_;
   double startTime_, baselineWindow_;
   std::vector<PressureSample> samples_;
+  // Fixed-particle share of Eq. 2 at each point, for the fixed set of this size and smoothing length.
+  mutable std::vector<double> fixedDensity_;
+  mutable std::size_t fixedCount_ = 0;
+  mutable double fixedH_ = 0;
+  mutable const void* fixedOwner_ = nullptr;
 };
 
 } // namespace cementsph::sph
