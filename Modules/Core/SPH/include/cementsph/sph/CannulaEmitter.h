@@ -15,9 +15,12 @@
 //    so a full layer has its centroid on the axis. Particles fill the slots of a layer one at a time; a layer
 //    holds N d^3 of cement, i.e. it is the slab of thickness N d^3 / (pi D^2 / 4) that the bore cement
 //    advances at v0 in the time N d^3 / Q: emitting per volume and emitting per distance travelled agree.
+//  * Position: the slot, moved along the axis by v0 (t - t_k) (t_k the particle's due time; at most one layer
+//    thickness): where it would be had it left on time at v0. Exactly in the tip plane, a layer stays planar
+//    under the overdamped integrator in empty space (nothing pushes it off the plane): measured, a flat disc.
 //  * Velocity v0 along the axis (used by the central-difference and explicit integrators; the overdamped one
 //    sets v = a / gamma, so there the cement is pushed out by the pressure of the particles behind it).
-//  * Optional wall: fixed particles (mass rho0 d^3, like the fixed particles of the paper) on rings of radius
+//  * Optional wall: fixed particles on rings of radius
 //    D/2 + s/2 + k s (k < wallLayers), one ring every s from the tip plane back a length L, and the bore from
 //    one fluid spacing d behind the tip to L filled with fixed particles (square lattice of spacing s), so
 //    cement cannot flow back into the cannula. s = d/2 by default. Fixed particles of mass rho0 s^3 (the
