@@ -4,7 +4,10 @@
 //  (c) 5k fluid particles among 150k fixed ones at 15 % solid, the shape of the cement scenes.
 // Reported counter: fluid-particle-steps per second. Threads: --benchmark_filter and OMP_NUM_THREADS,
 // or the /threads argument below. Skin: the second argument (fraction of h; 0 rebuilds every step).
+#include "cementsph/sph/CannulaEmitter.h"
+#include "cementsph/sph/Presets.h"
 #include "cementsph/sph/Simulation.h"
+#include "cementsph/sph/TipPressureProbe.h"
 
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -78,6 +81,42 @@ void BM_CementShape(benchmark::State& state) {
   runSteps(state, *sim);
 }
 
+// (d) A whole injection into empty space: 5 ml at 0.05 ml/s (100 s) through an 11G bore, d = 1.14 mm
+// (3374 particles), 100 Pa.s, default preset (overdamped, h = d, Cf = 8.7), at most one particle per step, a
+// six-point tip pressure sample every step. One iteration is the whole run. Counters: simulated seconds per
+// wall second (real-time factor) and steps.
+void BM_Injection100s(benchmark::State& state) {
+  omp_set_num_threads(static_cast<int>(state.range(0)));
+  double simulated = 0, steps = 0, particles = 0;
+  for (auto _ : state) {
+    const ModelPreset preset = modelPreset("default");
+    CannulaSpec spec;
+    spec.buildWall = false;
+    CannulaEmitter emitter(spec);
+    ModelParameters m = preset.model;
+    m.smoothingLength = preset.hOverD * spec.spacing;
+    m.viscosity = 100.0;
+    m.maxTimeStep = emitter.maxTimeStep();
+    Domain domain;
+    domain.lower.setConstant(-30e-3);
+    domain.upper.setConstant(30e-3);
+    Simulation sim(m, domain);
+    TipPressureProbe probe(TipPressureProbe::ringAroundTip(spec.tip, spec.direction, 0.5 * spec.innerDiameter, 6, spec.spacing));
+    const double end = spec.totalVolume / spec.flowRate;
+    while (sim.time() < end) {
+      emitter.emit(sim);
+      sim.step();
+      probe.sample(sim);
+    }
+    simulated += sim.time();
+    steps += double(sim.statistics().steps);
+    particles = double(sim.fluid().size());
+  }
+  state.counters["real_time_factor"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
+  state.counters["steps"] = steps / double(state.iterations());
+  state.counters["fluid"] = particles;
+}
+
 } // namespace
 
 // Args: {threads, skin in percent of h}. Skin 0 rebuilds the lists every step: the rows at equal
@@ -87,5 +126,7 @@ void BM_CementShape(benchmark::State& state) {
 BENCHMARK(BM_DarcyBox) CEMENTSPH_STEP_ARGS;
 BENCHMARK(BM_PeriodicBox200k) CEMENTSPH_STEP_ARGS;
 BENCHMARK(BM_CementShape) CEMENTSPH_STEP_ARGS;
+
+BENCHMARK(BM_Injection100s)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 BENCHMARK_MAIN();

@@ -60,6 +60,7 @@ void Simulation::validateParameters() const {
             "the central-difference integrator (Eq. 8) is implicit in the drag only; Morris viscosity (Eq. 7) "
             "needs the explicit integrator");
   if (p.fixedTimeStep) require(std::isfinite(*p.fixedTimeStep) && *p.fixedTimeStep > 0, "time step must be positive");
+  if (p.maxTimeStep) require(std::isfinite(*p.maxTimeStep) && *p.maxTimeStep > 0, "maximum time step must be positive");
   const double listRadius = 2.0 * p.smoothingLength * (1.0 + 0.5 * p.neighbourSkin);
   const Eigen::Vector3d e = domain_.extent();
   for (int a = 0; a < 3; ++a) {
@@ -417,6 +418,7 @@ double Simulation::chooseTimeStep(const StepLimits& limits) {
     }
   } else {
     dt = std::min(stable, limits.displacement);
+    if (p.maxTimeStep) dt = std::min(dt, *p.maxTimeStep);
   }
   if (!std::isfinite(dt) || dt <= 0) throw SimulationError("no finite time step: nothing limits it (no fluid, no forces)");
   if (p.integrator == Integrator::CentralDifference) {
@@ -435,7 +437,8 @@ double Simulation::nextTimeStep() const {
   if (parameters_.integrator == Integrator::CentralDifference && centralDifferenceStep_ > 0) return centralDifferenceStep_;
   const StepLimits l = currentLimits();
   if (parameters_.fixedTimeStep) return std::min(*parameters_.fixedTimeStep, l.stable());
-  return std::min(l.stable(), l.displacement);
+  const double dt = std::min(l.stable(), l.displacement);
+  return parameters_.maxTimeStep ? std::min(dt, *parameters_.maxTimeStep) : dt;
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -39,6 +39,9 @@ struct ModelParameters {
   // --- time stepping --------------------------------------------------------------------------
   std::optional<double> fixedTimeStep;       // [s]; when unset the step follows the limits below
   StepLimitPolicy stepLimitPolicy = StepLimitPolicy::Refuse;
+  // Upper bound on the adaptive step [s] (unset: none). Added for the injection source, which emits at
+  // most one particle per step (CannulaEmitter::maxTimeStep()). Ignored when fixedTimeStep is set.
+  std::optional<double> maxTimeStep;
   double acousticCourant = 0.25;   // dt <= C h / cs (explicit pressure term)
   double viscousNumber = 0.125;    // dt <= C h^2 / nu (Morris et al. 1997), Explicit + Morris
   double forceCourant = 0.25;      // dt <= C sqrt(h / |a|max)
