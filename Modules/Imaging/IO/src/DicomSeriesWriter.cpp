@@ -2,7 +2,6 @@
 // Patient, following ITK's ResampleDICOM example (per-slice dictionaries, one study/series UID).
 #include "cementsph/imaging/VolumeIO.h"
 
-#include <gdcmUIDGenerator.h>
 #include <itkGDCMImageIO.h>
 #include <itkImageRegionConstIterator.h>
 #include <itkImageRegionIterator.h>
@@ -13,10 +12,28 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
 namespace cementsph::imaging {
+
+namespace {
+// A DICOM UID under the UUID-derived root 2.25 (ISO/IEC 9834-8): "2.25." and up to 38 random
+// decimal digits, no leading zero; well under the 64-character limit.
+class UidGenerator {
+public:
+  std::string Generate() {
+    std::uniform_int_distribution<int> digit(0, 9), first(1, 9);
+    std::string uid = "2.25." + std::to_string(first(rng_));
+    for (int i = 0; i < 36; ++i) uid += static_cast<char>('0' + digit(rng_));
+    return uid;
+  }
+
+private:
+  std::mt19937_64 rng_{std::random_device{}()};
+};
+} // namespace
 
 void writeDicomSeries(const ImageType* image, const std::string& directory) {
   namespace fs = std::filesystem;
@@ -38,7 +55,7 @@ void writeDicomSeries(const ImageType* image, const std::string& directory) {
 
   const auto size = image->GetLargestPossibleRegion().GetSize();
   const auto dir = image->GetDirection();
-  gdcm::UIDGenerator uid;
+  UidGenerator uid;
   const std::string study = uid.Generate();
   const std::string series = uid.Generate();
   const std::string frame = uid.Generate();

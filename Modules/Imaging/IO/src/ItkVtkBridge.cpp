@@ -1,6 +1,7 @@
 #include "cementsph/imaging/ItkVtkBridge.h"
 
 #include <vtkDataArray.h>
+#include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
 
 #include <algorithm>
