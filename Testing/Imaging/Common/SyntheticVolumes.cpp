@@ -19,13 +19,14 @@ BonePhantom::BonePhantom(const Vec3& centreMm, const Vec3& semiAxesMm, unsigned 
 }
 
 double BonePhantom::valueAt(const Vec3& p) const {
-  // Normalised ellipsoidal radius; smooth edges (logistic, ~1 mm wide) keep the image band-limited.
+  // Normalised ellipsoidal radius; smooth edges (logistic, scale 1 mm, like a CT's blur) keep the
+  // image band-limited, so linear interpolation of a 1-1.5 mm grid follows it closely.
   double r2 = 0.0;
   for (int i = 0; i < 3; ++i) r2 += (p[i] - centre_[i]) * (p[i] - centre_[i]) / (semi_[i] * semi_[i]);
   const double r = std::sqrt(r2);
   const double meanSemi = (semi_[0] + semi_[1] + semi_[2]) / 3.0;
   const double distMm = (r - 1.0) * meanSemi; // ~signed distance to the outer surface
-  auto step = [](double x) { return 1.0 / (1.0 + std::exp(-x / 0.7)); };
+  auto step = [](double x) { return 1.0 / (1.0 + std::exp(-x / 1.0)); };
   const double inside = step(-distMm);
   const double shell = step(distMm + 3.0) * inside; // 3 mm cortical shell
   double texture = 0.0;

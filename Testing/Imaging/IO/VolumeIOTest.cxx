@@ -99,8 +99,8 @@ TEST_P(FormatRoundTrip, KeepsGeometryAndValues) {
 
 INSTANTIATE_TEST_SUITE_P(Formats, FormatRoundTrip,
                          ::testing::Values(".nrrd", ".mha", ".nii", ".nii.gz"),
-                         [](const auto& info) {
-                           std::string n = info.param.substr(1);
+                         [](const auto& paramInfo) {
+                           std::string n = paramInfo.param.substr(1);
                            for (auto& ch : n)
                              if (ch == '.') ch = '_';
                            return n;

@@ -40,6 +40,14 @@ Pair makePair() {
 
 double ballMl(double r) { return 4.0 / 3.0 * M_PI * r * r * r / 1000.0; }
 
+// The synthetic cement has a smooth (logistic) edge: a threshold at half its contrast over tissue
+// (~3000 HU over ~0 +- 400 HU) puts the mask's edge at the ball's radius (+-0.1 mm).
+SegmentationOptions halfContrast() {
+  SegmentationOptions options;
+  options.differenceThresholdHU = 1500.0;
+  return options;
+}
+
 PointType toPoint(const Vec3& v) {
   PointType p;
   for (unsigned i = 0; i < 3; ++i) p[i] = v[i];
@@ -50,12 +58,11 @@ PointType toPoint(const Vec3& v) {
 
 TEST(CementSegmentation, KeepsTheComponentAtTheInjectionPoint) {
   const Pair p = makePair();
-  SegmentationOptions options;
+  SegmentationOptions options = halfContrast();
   options.injectionPointMm = toPoint(p.cement);
   const SegmentationResult r = segmentCement(p.post, p.pre, options);
   EXPECT_EQ(r.selection, "injection-point");
   EXPECT_EQ(r.componentsFound, 2u);
-  // The threshold (500 HU over ~0 HU tissue, cement 3000 HU) cuts near the ball's edge.
   EXPECT_NEAR(r.volumeMl, ballMl(p.cementRadius), 0.08 * ballMl(p.cementRadius));
   EXPECT_NEAR(maskVolumeMl(r.mask), r.volumeMl, 1e-12);
   // The leak is not in the mask.
@@ -66,14 +73,14 @@ TEST(CementSegmentation, KeepsTheComponentAtTheInjectionPoint) {
 
 TEST(CementSegmentation, LargestComponentWithoutInjectionPoint) {
   const Pair p = makePair();
-  const SegmentationResult r = segmentCement(p.post, p.pre);
+  const SegmentationResult r = segmentCement(p.post, p.pre, halfContrast());
   EXPECT_EQ(r.selection, "largest");
   EXPECT_NEAR(r.volumeMl, ballMl(p.leakRadius), 0.08 * ballMl(p.leakRadius));
 }
 
 TEST(CementSegmentation, NearestComponentWhenThePointMissesTheMask) {
   const Pair p = makePair();
-  SegmentationOptions options;
+  SegmentationOptions options = halfContrast();
   options.injectionPointMm = toPoint({p.cement[0] - 9.0, p.cement[1], p.cement[2]}); // 3 mm outside
   const SegmentationResult r = segmentCement(p.post, p.pre, options);
   EXPECT_EQ(r.selection, "nearest-to-injection-point");

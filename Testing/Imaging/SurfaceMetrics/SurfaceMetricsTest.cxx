@@ -47,14 +47,15 @@ TEST(SurfaceDistance, ConcentricSpheresMeanDistanceIsDelta) {
   const double h = 0.5; // mm
   const Point3 c{24.2 * h, 23.7 * h, 24.9 * h};
   const double r = 14.3 * h, delta = 3.5 * h;
+  // Default isosurface: mask smoothed with sigma = 1 voxel (the staircase surface of the raw mask
+  // is biased low by 0.15-0.2 voxel; see IsosurfaceOptions).
   auto inner = isosurface(voxelise(50, h, ball(c, r)));
   auto outer = isosurface(voxelise(50, h, ball(c, r + delta)));
   const SurfaceComparison cmp = compareSurfaces(inner, outer);
   EXPECT_NEAR(cmp.aToB.meanMm, delta, 0.1 * h);
   EXPECT_NEAR(cmp.bToA.meanMm, delta, 0.1 * h);
   EXPECT_NEAR(cmp.errorMm, delta, 0.1 * h);
-  // Staircase surfaces of binary masks scatter the per-vertex distance by about a quarter voxel.
-  EXPECT_LT(cmp.aToB.stdMm, 0.35 * h);
+  EXPECT_LT(cmp.aToB.stdMm, 0.2 * h);
   std::cout << "concentric spheres: a->b " << cmp.aToB.meanMm / h << " b->a " << cmp.bToA.meanMm / h
             << " voxels (delta 3.5)\n";
   EXPECT_GE(cmp.hausdorffMm, cmp.hausdorff95Mm);

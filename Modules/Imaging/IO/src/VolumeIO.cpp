@@ -11,10 +11,17 @@
 #include <itkNiftiImageIO.h>
 #include <itkNrrdImageIO.h>
 
+#include <zlib.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <cctype>
+#include <iostream>
+#include <memory>
+#include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace cementsph::imaging {
 
@@ -118,6 +125,51 @@ ImageType::Pointer readDicomSeries(const std::string& directory) {
   return reader->GetOutput();
 }
 
+// ITK reports a truncated NRRD, but reads truncated NIfTI files without an error (nifti_io only
+// prints to stderr) and MetaIO only prints "data not read completely" to std::cerr. So: NIfTI is
+// checked for size (gzip streams are decompressed to the end, which also catches a corrupt stream),
+// and MetaImage reads run with std::cerr captured; anything MetaIO says is taken as an error.
+constexpr std::uintmax_t kNiftiHeaderBytes = 348;
+
+void checkNiftiComplete(const std::string& path, std::uintmax_t imageBytes) {
+  const std::string ext = fullExtension(path);
+  std::uintmax_t available = 0;
+  if (ext == ".nii") {
+    available = fs::file_size(path);
+  } else if (ext == ".nii.gz") {
+    gzFile gz = gzopen(path.c_str(), "rb");
+    if (!gz) throw std::runtime_error(path + ": cannot open");
+    std::vector<char> buffer(1 << 16);
+    int n = 0;
+    while ((n = gzread(gz, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0)
+      available += static_cast<std::uintmax_t>(n);
+    int code = Z_OK;
+    const std::string message = n < 0 ? gzerror(gz, &code) : "";
+    gzclose(gz);
+    if (n < 0) throw std::runtime_error(path + ": corrupt or truncated gzip stream: " + message);
+  } else {
+    return;
+  }
+  if (available < imageBytes + kNiftiHeaderBytes)
+    throw std::runtime_error(path + ": truncated (" + std::to_string(available) + " bytes of data, "
+                             "at least " + std::to_string(imageBytes + kNiftiHeaderBytes) +
+                             " expected)");
+}
+
+// Redirects std::cerr into a string for its lifetime (not thread-safe: reads are sequential here).
+class CerrCapture {
+public:
+  CerrCapture() : old_(std::cerr.rdbuf(captured_.rdbuf())) {}
+  ~CerrCapture() { std::cerr.rdbuf(old_); }
+  CerrCapture(const CerrCapture&) = delete;
+  CerrCapture& operator=(const CerrCapture&) = delete;
+  std::string text() const { return captured_.str(); }
+
+private:
+  std::ostringstream captured_;
+  std::streambuf* old_;
+};
+
 } // namespace
 
 ImageType::Pointer readVolume(const std::string& path) {
@@ -150,10 +202,25 @@ ImageType::Pointer readVolume(const std::string& path) {
       if (io->GetNumberOfDimensions() != 3)
         throw std::runtime_error(path + ": not a 3-D volume (" +
                                  std::to_string(io->GetNumberOfDimensions()) + "-D image)");
+      checkNiftiComplete(path, io->GetImageSizeInBytes());
       auto reader = itk::ImageFileReader<ImageType>::New();
       reader->SetImageIO(io);
       reader->SetFileName(path);
-      reader->Update();
+      const bool isMeta = dynamic_cast<itk::MetaImageIO*>(io.GetPointer()) != nullptr;
+      std::string metaMessages;
+      {
+        std::unique_ptr<CerrCapture> capture;
+        if (isMeta) capture = std::make_unique<CerrCapture>();
+        reader->Update();
+        if (capture) metaMessages = capture->text();
+      }
+      if (!metaMessages.empty()) {
+        while (!metaMessages.empty() && std::isspace(static_cast<unsigned char>(metaMessages.back())))
+          metaMessages.pop_back();
+        for (auto& ch : metaMessages)
+          if (ch == '\n') ch = ' ';
+        throw std::runtime_error(path + ": corrupt or truncated MetaImage (" + metaMessages + ")");
+      }
       image = reader->GetOutput();
     }
   } catch (const itk::ExceptionObject& e) {

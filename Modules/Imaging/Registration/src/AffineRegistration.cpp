@@ -11,10 +11,13 @@
 #include <itkMeanSquaresImageToImageMetricv4.h>
 #include <itkMinimumMaximumImageCalculator.h>
 #include <itkRegistrationParameterScalesFromPhysicalShift.h>
-#include <itkRegularStepGradientDescentOptimizerv4.h>
+#include <itkConjugateGradientLineSearchOptimizerv4.h>
+#include <itkEuler3DTransform.h>
 #include <itkTranslationTransform.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <iostream>
 #include <sstream>
@@ -24,7 +27,7 @@ namespace cementsph::imaging {
 
 namespace {
 
-using OptimizerType = itk::RegularStepGradientDescentOptimizerv4<double>;
+using OptimizerType = itk::ConjugateGradientLineSearchOptimizerv4Template<double>;
 using MetricType = itk::MeanSquaresImageToImageMetricv4<ImageType, ImageType>;
 using MaskSpatialObject = itk::ImageMaskSpatialObject<3>;
 
@@ -51,6 +54,7 @@ public:
       level.level = static_cast<unsigned>(count++);
       level.shrink = (*shrink)[level.level];
       levels->push_back(level);
+      if (levels->size() > 1 && verbose) std::cerr << "    stop: " << optimizer->GetStopConditionDescription() << "\n";
     } else if (itk::IterationEvent().CheckEvent(&event) && !levels->empty()) {
       auto& level = levels->back();
       level.iterations = static_cast<unsigned>(optimizer->GetCurrentIteration()) + 1;
@@ -118,15 +122,24 @@ void runStage(const ImageType* fixed, const ImageType* moving, MaskSpatialObject
   auto scales = itk::RegistrationParameterScalesFromPhysicalShift<MetricType>::New();
   scales->SetMetric(metric);
 
+  // Conjugate gradient with a golden-section line search, physical-shift scales. The search
+  // bracket is sized at every iteration so that its far end moves no voxel more than
+  // 2 * initialStepMm. Measured on the 10-degree test case: regular-step gradient descent
+  // zig-zagged in the coupled rotation/shear valley (200 iterations per level, TRE 0.5-7 mm);
+  // the line search converges in tens of iterations to TRE 0.15 mm.
   auto optimizer = OptimizerType::New();
-  optimizer->SetLearningRate(options.initialStepMm);
-  optimizer->SetMinimumStepLength(options.minimumStepMm);
-  optimizer->SetRelaxationFactor(0.5);
-  optimizer->SetGradientMagnitudeTolerance(1e-10);
-  optimizer->SetNumberOfIterations(options.maxIterationsPerLevel);
-  optimizer->SetScalesEstimator(scales);
+  optimizer->SetLowerLimit(0.0);
+  optimizer->SetUpperLimit(2.0);
+  optimizer->SetEpsilon(0.2);
+  optimizer->SetMaximumLineSearchIterations(20);
+  optimizer->SetLearningRate(1.0);
+  optimizer->SetMaximumStepSizeInPhysicalUnits(options.initialStepMm);
   optimizer->SetDoEstimateLearningRateOnce(false);
-  optimizer->SetDoEstimateLearningRateAtEachIteration(false);
+  optimizer->SetDoEstimateLearningRateAtEachIteration(true);
+  optimizer->SetNumberOfIterations(options.maxIterationsPerLevel);
+  optimizer->SetMinimumConvergenceValue(options.convergenceValue);
+  optimizer->SetConvergenceWindowSize(options.convergenceWindow);
+  optimizer->SetScalesEstimator(scales);
 
   auto registration = Registration::New();
   registration->SetFixedImage(fixed);
@@ -145,8 +158,16 @@ void runStage(const ImageType* fixed, const ImageType* moving, MaskSpatialObject
   registration->SetShrinkFactorsPerLevel(shrinkArray);
   registration->SetSmoothingSigmasPerLevel(sigmaArray);
   registration->SetSmoothingSigmasAreSpecifiedInPhysicalUnits(false);
+  // A fixed number of random samples per level (as elastix does), so the cost of an iteration does
+  // not grow with the volume: the fraction is samples / voxels of the shrunk fixed grid.
   registration->SetMetricSamplingStrategy(Registration::MetricSamplingStrategyType::RANDOM);
-  registration->SetMetricSamplingPercentage(options.samplingFraction);
+  typename Registration::MetricSamplingPercentageArrayType percentages(shrink.size());
+  const double voxels = static_cast<double>(fixed->GetLargestPossibleRegion().GetNumberOfPixels());
+  for (std::size_t i = 0; i < shrink.size(); ++i) {
+    const double levelVoxels = voxels / std::pow(static_cast<double>(shrink[i]), 3.0);
+    percentages[i] = std::min(1.0, static_cast<double>(options.samplesPerLevel) / levelVoxels);
+  }
+  registration->SetMetricSamplingPercentagePerLevel(percentages);
   registration->MetricSamplingReinitializeSeed(20130607); // reproducible runs
 
   auto recorder = LevelRecorder::New();
@@ -154,6 +175,7 @@ void runStage(const ImageType* fixed, const ImageType* moving, MaskSpatialObject
   recorder->stage = stage;
   recorder->shrink = &shrink;
   recorder->optimizer = optimizer;
+  recorder->verbose = options.verbose;
   registration->AddObserver(itk::MultiResolutionIterationEvent(), recorder);
   optimizer->AddObserver(itk::IterationEvent(), recorder);
 
@@ -217,9 +239,20 @@ RegistrationResult registerAffine(const ImageType* fixed, const ImageType* movin
     runStage(fixed, moving, movingMask.GetPointer(), translation.GetPointer(), "translation",
              options.translationShrink, options.translationSigmaVoxels, options, result);
 
+    // Rigid before affine: in the affine's matrix parameters a rotation is a narrow valley coupled
+    // with shear, where gradient descent zig-zags (measured: a 10-degree rotation was half
+    // recovered after 200 iterations per level); Euler angles are well conditioned.
+    auto rigid = itk::Euler3DTransform<double>::New();
+    rigid->SetCenter(fixedCentre);
+    rigid->SetTranslation(translation->GetOffset());
+    if (!options.rigidShrink.empty())
+      runStage(fixed, moving, movingMask.GetPointer(), rigid.GetPointer(), "rigid",
+               options.rigidShrink, options.rigidSigmaVoxels, options, result);
+
     auto affine = AffineTransformType::New();
     affine->SetCenter(fixedCentre);
-    affine->SetTranslation(translation->GetOffset());
+    affine->SetMatrix(rigid->GetMatrix());
+    affine->SetTranslation(rigid->GetTranslation());
     runStage(fixed, moving, movingMask.GetPointer(), affine.GetPointer(), "affine",
              options.affineShrink, options.affineSigmaVoxels, options, result);
     result.transform = affine;
@@ -229,6 +262,26 @@ RegistrationResult registerAffine(const ImageType* fixed, const ImageType* movin
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+} // namespace cementsph::imaging
+
+namespace cementsph::imaging {
+
+std::string formatRegistrationReport(const RegistrationResult& r) {
+  std::ostringstream out;
+  out << "  stage        level shrink iterations  metric (mean squares, HU^2)\n";
+  char line[160];
+  for (const auto& level : r.levels) {
+    std::snprintf(line, sizeof line, "  %-12s %5u %6u %10u  %.6g\n", level.stage.c_str(), level.level,
+                  level.shrink, level.iterations, level.metric);
+    out << line;
+  }
+  std::snprintf(line, sizeof line,
+                "  final metric %.6g; cement excluded above %.0f HU (%zu moving voxels); %.2f s\n",
+                r.finalMetric, r.cementThresholdHU, r.maskedMovingVoxels, r.seconds);
+  out << line;
+  return out.str();
 }
 
 } // namespace cementsph::imaging

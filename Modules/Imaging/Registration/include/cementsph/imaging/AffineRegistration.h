@@ -1,5 +1,6 @@
 // Affine, intensity-based registration of a post-injection CT onto the pre-injection CT
-// (ITK v4 framework): a translation stage, then an affine stage, both multi-resolution, with a
+// (ITK v4 framework): a translation stage, a rigid stage, then an affine stage, each
+// multi-resolution, with a
 // same-modality metric (mean squares: both scans are CT of the same specimen, in HU).
 //
 // Robustness to the cement: the cement exists only in the moving (post) image and is brighter than
@@ -25,17 +26,20 @@ struct RegistrationOptions {
   // Multi-resolution schedules (shrink factors; Gaussian sigmas in voxels of the shrunk level).
   std::vector<unsigned> translationShrink{4, 2};
   std::vector<double> translationSigmaVoxels{2.0, 1.0};
-  std::vector<unsigned> affineShrink{4, 2, 1};
-  std::vector<double> affineSigmaVoxels{2.0, 1.0, 0.0};
+  std::vector<unsigned> rigidShrink{4, 2}; // empty: no rigid stage
+  std::vector<double> rigidSigmaVoxels{2.0, 1.0};
+  std::vector<unsigned> affineShrink{2, 1};
+  std::vector<double> affineSigmaVoxels{1.0, 0.0};
   unsigned maxIterationsPerLevel = 200;
-  double initialStepMm = 2.0;   // regular-step gradient descent, physical-shift scales
-  double minimumStepMm = 0.005;
-  double samplingFraction = 0.15; // random sample of the fixed grid at each level (fixed seed)
+  double initialStepMm = 2.0;       // line-search bracket: 2x this largest voxel shift
+  double convergenceValue = 1e-6;   // ITK's windowed convergence test on the metric
+  unsigned convergenceWindow = 10;
+  unsigned samplesPerLevel = 40000; // random fixed-grid samples per level (fixed seed)
   bool verbose = false;
 };
 
 struct RegistrationLevel {
-  std::string stage; // "translation" or "affine"
+  std::string stage; // "translation", "rigid" or "affine"
   unsigned level = 0;
   unsigned shrink = 1;
   unsigned iterations = 0;
@@ -65,5 +69,13 @@ ImageType::Pointer resampleOnto(const ImageType* moving, const ImageType* fixedG
 // ITK transform files (.tfm/.txt, .h5, .mat), written atomically.
 void writeTransform(const AffineTransformType* transform, const std::string& path);
 AffineTransformType::Pointer readTransform(const std::string& path);
+
+} // namespace cementsph::imaging
+
+namespace cementsph::imaging {
+
+// A short text table of the levels (stage, shrink, iterations, metric) and the final metric, for
+// the command-line summaries.
+std::string formatRegistrationReport(const RegistrationResult& result);
 
 } // namespace cementsph::imaging
