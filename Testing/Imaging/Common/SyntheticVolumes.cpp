@@ -166,4 +166,26 @@ double cornerTreMm(const Grid& grid, const Affine& truth,
   return std::sqrt(sum / 8.0);
 }
 
+RegistrationCase makeRegistrationCase(unsigned n, double spacing, const Vec3& rot, const Vec3& scale,
+                                      const Vec3& shift, bool cement,
+                                      const std::array<double, 9>& direction, unsigned seed) {
+  RegistrationCase c;
+  c.grid.size = {n, n, n};
+  c.grid.spacing = {spacing, spacing, spacing * 1.05};
+  c.grid.direction = direction;
+  c.grid.origin = {-40.0, 12.0, 100.0};
+  const Vec3 centre = gridCentre(c.grid);
+  const double half = 0.5 * (n - 1) * spacing;
+  const BonePhantom phantom(centre, {0.78 * half, 0.66 * half, 0.72 * half}, seed);
+  c.truth = Affine::fromParameters(rot, scale, shift, centre);
+  c.fixed = sample(phantom, c.grid);
+  CementBall ball;
+  if (cement) {
+    ball.centreMm = c.truth.apply({centre[0] + 0.2 * half, centre[1] - 0.15 * half, centre[2]});
+    ball.radiusMm = 9.0;
+  }
+  c.moving = sample(phantom, c.grid, c.truth, ball);
+  return c;
+}
+
 } // namespace cementsph::testing

@@ -70,4 +70,18 @@ double cornerTreMm(const Grid& grid, const Affine& truth,
 
 Vec3 gridCentre(const Grid& grid);
 
+// A registration problem with a known answer: fixed = phantom on an n^3 grid (z spacing 5 % larger,
+// so the voxels are anisotropic), moving = phantom moved by `truth` on the same grid, optionally
+// with a 9 mm ball of 3000 HU "cement" inside the moved bone. The registration should find a
+// transform equal to truth (fixed points -> moving points).
+struct RegistrationCase {
+  Grid grid;
+  Affine truth;
+  ImageType::Pointer fixed, moving;
+};
+RegistrationCase makeRegistrationCase(unsigned n, double spacingMm, const Vec3& rotationDeg,
+                                      const Vec3& scale, const Vec3& translationMm, bool cement,
+                                      const std::array<double, 9>& direction = {1, 0, 0, 0, 1, 0, 0, 0, 1},
+                                      unsigned seed = 7);
+
 } // namespace cementsph::testing

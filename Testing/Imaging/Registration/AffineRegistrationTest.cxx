@@ -27,39 +27,11 @@ std::function<Vec3(const Vec3&)> asFunction(const AffineTransformType* t) {
   };
 }
 
-struct Case {
-  Grid grid;
-  Affine truth;
-  ImageType::Pointer fixed, moving;
-};
-
-Case makeCase(unsigned n, double spacing, const Vec3& rot, const Vec3& scale, const Vec3& shift,
-              bool cement, const std::array<double, 9>& direction = {1, 0, 0, 0, 1, 0, 0, 0, 1}) {
-  Case c;
-  c.grid.size = {n, n, n};
-  c.grid.spacing = {spacing, spacing, spacing * 1.05};
-  c.grid.direction = direction;
-  c.grid.origin = {-40.0, 12.0, 100.0};
-  const Vec3 centre = gridCentre(c.grid);
-  const double half = 0.5 * (n - 1) * spacing;
-  const BonePhantom phantom(centre, {0.78 * half, 0.66 * half, 0.72 * half});
-  c.truth = Affine::fromParameters(rot, scale, shift, centre);
-  c.fixed = sample(phantom, c.grid);
-  CementBall ball;
-  if (cement) {
-    // In the moving image, inside the (moved) bone: a 9 mm ball of 3000 HU.
-    ball.centreMm = c.truth.apply({centre[0] + 0.2 * half, centre[1] - 0.15 * half, centre[2]});
-    ball.radiusMm = 9.0;
-  }
-  c.moving = sample(phantom, c.grid, c.truth, ball);
-  return c;
-}
-
 } // namespace
 
 TEST(AffineRegistration, RecoversAKnownAffineDespiteCement) {
   // Rotation angles 4, -5, 8 degrees (about 10 degrees in all), scales +5/-4/+3 %, shift 9.3 mm.
-  const Case c = makeCase(72, 1.25, {4.0, -5.0, 8.0}, {1.05, 0.96, 1.03}, {6.0, -5.0, 5.0}, true);
+  const RegistrationCase c = makeRegistrationCase(72, 1.25, {4.0, -5.0, 8.0}, {1.05, 0.96, 1.03}, {6.0, -5.0, 5.0}, true);
   ASSERT_GT(cornerTreMm(c.grid, c.truth, [](const Vec3& x) { return x; }), 10.0);
   RegistrationOptions options;
   options.verbose = true;
@@ -79,7 +51,7 @@ TEST(AffineRegistration, RecoversAKnownAffineDespiteCement) {
 TEST(AffineRegistration, GeometrySurvivesReadRegisterWrite) {
   const double a = 20.0 * M_PI / 180.0;
   const std::array<double, 9> oblique{std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a)};
-  const Case c = makeCase(48, 1.5, {2.0, 3.0, -3.0}, {1.02, 0.99, 1.0}, {2.0, 1.0, -2.0}, false, oblique);
+  const RegistrationCase c = makeRegistrationCase(48, 1.5, {2.0, 3.0, -3.0}, {1.02, 0.99, 1.0}, {2.0, 1.0, -2.0}, false, oblique);
   const fs::path dir = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "registration-geometry";
   fs::remove_all(dir);
   fs::create_directories(dir);
