@@ -117,8 +117,8 @@ TEST_F(CompareCommand, WritesMetricsSurfacesAndVolumes) {
     for (const char* sub : {"mean_mm", "max_mm", "std_mm"}) ASSERT_TRUE(m[key][sub].is_number()) << key << sub;
   // The synthetic ball (r = 6 mm, 3000 HU) has a logistic edge of scale 0.35 mm: the default 500 HU
   // threshold (w = 1/6) puts the mask's edge at r + 0.35 ln 5 = 6.56 mm, i.e. 1.18 ml.
-  const double r = 6.0 + 0.35 * std::log(5.0);
-  const double ballMl = 4.0 / 3.0 * M_PI * r * r * r / 1000.0;
+  const double edge = 6.0 + 0.35 * std::log(5.0);
+  const double ballMl = 4.0 / 3.0 * M_PI * edge * edge * edge / 1000.0;
   EXPECT_NEAR(m["cement_volume_ml"].get<double>(), ballMl, 0.08 * ballMl);
   // A ball centred 1 mm from the injection point: mean spreading distance ~ 3R/4 = 4.5 mm.
   EXPECT_NEAR(m["mean_spreading_distance_mm"].get<double>(), 4.6, 1.0);
