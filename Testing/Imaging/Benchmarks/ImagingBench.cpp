@@ -4,7 +4,7 @@
 //     the same files (when `elastix` is on PATH), and ours without the cement mask.
 //  2. Surface metrics between two ~100k-vertex surfaces (both directions).
 //  3. A whole `cementsph compare` on an 85x85x80 region of 0.47x0.47x0.5 mm voxels.
-// Usage: imaging-bench [work-dir] [--quick]. Prints Markdown tables.
+// Usage: imaging-bench [work-dir] [--quick] [--only=surfaces|compare|registration]. Prints Markdown.
 #include "SyntheticVolumes.h"
 #include "cementsph/imaging/AffineRegistration.h"
 #include "cementsph/imaging/VolumeIO.h"
@@ -228,15 +228,18 @@ void benchCompare(const fs::path& work) {
 int main(int argc, char** argv) {
   fs::path work = fs::temp_directory_path() / "cementsph-imaging-bench";
   bool quick = false;
+  std::string only;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") quick = true;
+    else if (a.rfind("--only=", 0) == 0) only = a.substr(7);
     else work = a;
   }
   fs::create_directories(work);
   std::cout << "## Imaging benchmark (imaging-bench)\n";
-  benchSurfaces();
-  benchCompare(work);
-  benchRegistration(work, quick ? 64 : 128, quick ? 1.5 : 0.8, quick ? 1 : 3);
+  if (only.empty() || only == "surfaces") benchSurfaces();
+  if (only.empty() || only == "compare") benchCompare(work);
+  if (only.empty() || only == "registration")
+    benchRegistration(work, quick ? 64 : 128, quick ? 1.5 : 0.8, quick ? 1 : 3);
   return 0;
 }

@@ -1,51 +1,175 @@
 #include "cementsph/surfacemetrics/SurfaceDistance.h"
 
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
 #include <vtkDoubleArray.h>
-#include <vtkGenericCell.h>
+#include <vtkIdList.h>
 #include <vtkPointData.h>
 #include <vtkSmartPointer.h>
-#include <vtkStaticCellLocator.h>
-
-#include <omp.h>
+#include <vtkStaticPointLocator.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace cementsph::surfacemetrics {
+
+namespace {
+
+using V3 = std::array<double, 3>;
+
+inline double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline V3 sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+
+// Squared distance from p to triangle (a, b, c): the closest-point-on-triangle construction by
+// Voronoi regions (Ericson, Real-Time Collision Detection, 5.1.5).
+double pointTriangleDistance2(const V3& p, const V3& a, const V3& b, const V3& c) {
+  const V3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  auto dist2 = [&p](const V3& q) { const V3 d = sub(p, q); return dot(d, d); };
+  if (d1 <= 0 && d2 <= 0) return dist2(a);
+  const V3 bp = sub(p, b);
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return dist2(b);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return dist2({a[0] + v * ab[0], a[1] + v * ab[1], a[2] + v * ab[2]});
+  }
+  const V3 cp = sub(p, c);
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return dist2(c);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return dist2({a[0] + w * ac[0], a[1] + w * ac[1], a[2] + w * ac[2]});
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return dist2({b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2])});
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return dist2({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
+}
+
+// A triangle surface prepared for exact point-to-surface queries: vertices in a static point
+// locator, vertex -> triangle links, and the longest edge L. For a query x with nearest vertex at
+// distance dv, the closest surface point lies in a triangle T at distance d <= dv, and every point
+// of T is within L / sqrt(3) of one of T's vertices, so T has a vertex within dv + L / sqrt(3) of
+// x: the triangles linked to the vertices in that ball contain the answer. Exact, and much faster
+// here than vtkStaticCellLocator::FindClosestPoint in VTK 9.1 (measured: 2.7 s against ~0.3 s for
+// 2 x 100k vertices on 2 cores).
+struct TriangleSurface {
+  std::vector<V3> points;
+  std::vector<std::array<vtkIdType, 3>> triangles;
+  std::vector<vtkIdType> linkStart, links; // CSR: triangles of vertex v are links[linkStart[v]..]
+  double longestEdge = 0.0;
+  vtkSmartPointer<vtkStaticPointLocator> locator;
+
+  explicit TriangleSurface(vtkPolyData* surface) {
+    const vtkIdType np = surface->GetNumberOfPoints();
+    points.resize(static_cast<std::size_t>(np));
+    for (vtkIdType i = 0; i < np; ++i) surface->GetPoint(i, points[static_cast<std::size_t>(i)].data());
+    vtkCellArray* polys = surface->GetPolys();
+    auto it = vtk::TakeSmartPointer(polys->NewIterator());
+    for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell()) {
+      vtkIdType n;
+      const vtkIdType* ids;
+      it->GetCurrentCell(n, ids);
+      for (vtkIdType k = 1; k + 1 < n; ++k) triangles.push_back({ids[0], ids[k], ids[k + 1]}); // fan
+    }
+    if (triangles.empty()) throw std::invalid_argument("surface distance: surface has no polygons");
+    linkStart.assign(static_cast<std::size_t>(np) + 1, 0);
+    for (const auto& t : triangles)
+      for (vtkIdType v : t) ++linkStart[static_cast<std::size_t>(v) + 1];
+    for (std::size_t i = 1; i < linkStart.size(); ++i) linkStart[i] += linkStart[i - 1];
+    links.resize(static_cast<std::size_t>(linkStart.back()));
+    std::vector<vtkIdType> fill(linkStart.begin(), linkStart.end() - 1);
+    for (std::size_t t = 0; t < triangles.size(); ++t)
+      for (vtkIdType v : triangles[t]) {
+        links[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<vtkIdType>(t);
+      }
+    for (const auto& t : triangles)
+      for (int e = 0; e < 3; ++e) {
+        const V3 d = sub(points[static_cast<std::size_t>(t[e])], points[static_cast<std::size_t>(t[(e + 1) % 3])]);
+        longestEdge = std::max(longestEdge, std::sqrt(dot(d, d)));
+      }
+    locator = vtkSmartPointer<vtkStaticPointLocator>::New();
+    locator->SetDataSet(surface);
+    locator->BuildLocator();
+  }
+
+  // Per-thread scratch for distance(): the candidate list, and a stamp per triangle so that each
+  // triangle is tested once per query without sorting.
+  struct Scratch {
+    vtkSmartPointer<vtkIdList> ids = vtkSmartPointer<vtkIdList>::New();
+    std::vector<std::pair<double, vtkIdType>> candidates;
+    std::vector<unsigned> stamp;
+    unsigned query = 0;
+  };
+
+  // Thread-safe: the static locator's queries are, and the scratch is the caller's.
+  double distance(const V3& x, Scratch& s) const {
+    if (s.stamp.size() != triangles.size()) s.stamp.assign(triangles.size(), 0);
+    if (++s.query == 0) { // wrapped: reset the stamps
+      std::fill(s.stamp.begin(), s.stamp.end(), 0u);
+      s.query = 1;
+    }
+    double q[3] = {x[0], x[1], x[2]};
+    const vtkIdType nearest = locator->FindClosestPoint(q);
+    const V3 dn = sub(x, points[static_cast<std::size_t>(nearest)]);
+    double best2 = dot(dn, dn);
+    const double reach = longestEdge / std::sqrt(3.0) * (1.0 + 1e-9) + 1e-12;
+    locator->FindPointsWithinRadius(std::sqrt(best2) + reach, q, s.ids);
+    s.candidates.clear();
+    for (vtkIdType k = 0; k < s.ids->GetNumberOfIds(); ++k) {
+      const vtkIdType v = s.ids->GetId(k);
+      const V3 d = sub(x, points[static_cast<std::size_t>(v)]);
+      s.candidates.emplace_back(std::sqrt(dot(d, d)), v);
+    }
+    std::sort(s.candidates.begin(), s.candidates.end());
+    // Nearest vertices first; a vertex farther than best + reach cannot own a closer triangle.
+    for (const auto& [dw, v] : s.candidates) {
+      if (dw > std::sqrt(best2) + reach) break;
+      const auto vi = static_cast<std::size_t>(v);
+      for (vtkIdType l = linkStart[vi]; l < linkStart[vi + 1]; ++l) {
+        const auto t = static_cast<std::size_t>(links[static_cast<std::size_t>(l)]);
+        if (s.stamp[t] == s.query) continue;
+        s.stamp[t] = s.query;
+        const auto& tri = triangles[t];
+        best2 = std::min(best2, pointTriangleDistance2(x, points[static_cast<std::size_t>(tri[0])],
+                                                       points[static_cast<std::size_t>(tri[1])],
+                                                       points[static_cast<std::size_t>(tri[2])]));
+      }
+    }
+    return std::sqrt(best2);
+  }
+};
+
+} // namespace
 
 std::vector<double> vertexDistances(vtkPolyData* from, vtkPolyData* to) {
   if (!from || !to || from->GetNumberOfPoints() == 0 || to->GetNumberOfCells() == 0)
     throw std::invalid_argument("surface distance: empty surface");
-  to->BuildCells(); // GetCell must not build lazily inside the parallel loop
-  const int threads = std::max(1, omp_get_max_threads());
-  // One locator per thread: FindClosestPoint keeps scratch state in the locator.
-  std::vector<vtkSmartPointer<vtkStaticCellLocator>> locators(static_cast<std::size_t>(threads));
-  for (auto& locator : locators) {
-    locator = vtkSmartPointer<vtkStaticCellLocator>::New();
-    locator->SetDataSet(to);
-    locator->SetNumberOfCellsPerNode(8);
-    locator->BuildLocator();
-  }
+  const TriangleSurface target(to);
   const vtkIdType n = from->GetNumberOfPoints();
   std::vector<double> distances(static_cast<std::size_t>(n));
-#pragma omp parallel num_threads(threads)
+#pragma omp parallel
   {
-    vtkStaticCellLocator* locator = locators[static_cast<std::size_t>(omp_get_thread_num())];
-    auto cell = vtkSmartPointer<vtkGenericCell>::New();
-#pragma omp for schedule(static)
+    TriangleSurface::Scratch scratch;
+#pragma omp for schedule(dynamic, 1024)
     for (vtkIdType i = 0; i < n; ++i) {
-      double x[3], closest[3], dist2 = 0.0;
-      vtkIdType cellId = -1;
-      int subId = 0;
-      from->GetPoint(i, x);
-      locator->FindClosestPoint(x, closest, cell, cellId, subId, dist2);
-      distances[static_cast<std::size_t>(i)] = std::sqrt(dist2);
+      V3 x;
+      from->GetPoint(i, x.data());
+      distances[static_cast<std::size_t>(i)] = target.distance(x, scratch);
     }
   }
   return distances;
 }
-
 DirectedDistance summarise(const std::vector<double>& d) {
   DirectedDistance s;
   s.vertices = d.size();
