@@ -23,18 +23,23 @@ struct RegistrationOptions {
   bool maskCement = true;
   double cementMarginHU = 100.0;    // cement = moving > max(fixed) + margin
   double cementDilationMm = 2.0;    // grows the cement mask over its partial-volume rim
+  // The metric samples only the specimen: fixed voxels above this (tissue, not air), grown by
+  // bodyMarginMm. Skipped when that is over 90 % of the volume; -infinity or NaN disables it.
+  double bodyThresholdHU = -500.0;
+  double bodyMarginMm = 3.0;
   // Multi-resolution schedules (shrink factors; Gaussian sigmas in voxels of the shrunk level).
-  std::vector<unsigned> translationShrink{4, 2};
-  std::vector<double> translationSigmaVoxels{2.0, 1.0};
+  std::vector<unsigned> translationShrink{4};
+  std::vector<double> translationSigmaVoxels{2.0};
   std::vector<unsigned> rigidShrink{4, 2}; // empty: no rigid stage
   std::vector<double> rigidSigmaVoxels{2.0, 1.0};
   std::vector<unsigned> affineShrink{2, 1};
   std::vector<double> affineSigmaVoxels{1.0, 0.0};
   unsigned maxIterationsPerLevel = 200;
   double initialStepMm = 2.0;       // line-search bracket: 2x this largest voxel shift
-  double convergenceValue = 1e-6;   // ITK's windowed convergence test on the metric
+  double convergenceValue = 1e-5;   // ITK's windowed convergence test on the metric
   unsigned convergenceWindow = 10;
-  unsigned samplesPerLevel = 40000; // random fixed-grid samples per level (fixed seed)
+  unsigned lineSearchIterations = 10; // golden-section evaluations per iteration, at most
+  unsigned samplesPerLevel = 5000;  // random samples on the specimen per level (fixed seed)
   bool verbose = false;
 };
 
@@ -44,6 +49,7 @@ struct RegistrationLevel {
   unsigned shrink = 1;
   unsigned iterations = 0;
   double metric = 0.0; // mean squares, HU^2, at the end of the level
+  double seconds = 0.0; // wall time from the level's start (after smoothing) to its last iteration
   std::string stopCondition;
 };
 
