@@ -52,19 +52,21 @@ protected:
     dir_ = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "compare-command";
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    Grid grid;
-    grid.size = {60, 60, 56};
-    grid.spacing = {0.7, 0.7, 0.75};
-    grid.origin = {-20.65, -20.65, -20.625};
-    const Vec3 centre = gridCentre(grid);
-    const BonePhantom phantom(centre, {17, 15, 16}, 3);
-    const Affine move = Affine::fromParameters({2, -3, 4}, {1.01, 0.99, 1.0}, {1.5, -1.0, 2.0}, centre);
-    tip_ = {centre[0] + 1.0, centre[1] - 1.0, centre[2]};
-    writeVolume(sample(phantom, grid), (dir_ / "pre.nrrd").string());
-    writeVolume(sample(phantom, grid, move, {move.apply(tip_), 6.0, 3000.0}), (dir_ / "post.nrrd").string());
-    // The "simulation": a slightly larger ball, displaced 1 mm, on the pre grid.
-    writeVolume(sample(phantom, grid, {}, {{tip_[0] + 1.0, tip_[1], tip_[2]}, 6.5, 2500.0}),
-                (dir_ / "sim.nrrd").string());
+    CompareCase c;
+    c.grid.size = {60, 60, 56};
+    c.grid.spacing = {0.7, 0.7, 0.75};
+    c.grid.origin = {-20.65, -20.65, -20.625};
+    c.semiAxesMm = {17, 15, 16};
+    c.seed = 3;
+    c.rotationDeg = {2, -3, 4};
+    c.translationMm = {1.5, -1.0, 2.0};
+    // Post: a 6 mm ball; the "simulation": a slightly larger ball, displaced 1 mm.
+    c.cementRadiusMm = 6.0;
+    c.simRadiusMm = 6.5;
+    c.simOffsetMm = 1.0;
+    tip_ = writeCompareCase(c, dir_.string());
+    const Grid& grid = c.grid;
+    const BonePhantom phantom(gridCentre(grid), c.semiAxesMm, c.seed);
     // Post scanned somewhere else entirely: no overlap with pre.
     Grid far = grid;
     far.origin = {900, 900, 900};

@@ -1,6 +1,8 @@
 #include "SyntheticVolumes.h"
 
 #include <algorithm>
+#include "cementsph/imaging/VolumeIO.h"
+
 #include <cmath>
 #include <random>
 
@@ -186,6 +188,21 @@ RegistrationCase makeRegistrationCase(unsigned n, double spacing, const Vec3& ro
   }
   c.moving = sample(phantom, c.grid, c.truth, ball);
   return c;
+}
+
+Vec3 writeCompareCase(const CompareCase& c, const std::string& directory) {
+  const Vec3 centre = gridCentre(c.grid);
+  const BonePhantom phantom(centre, c.semiAxesMm, c.seed);
+  const Affine move = Affine::fromParameters(c.rotationDeg, c.scale, c.translationMm, centre);
+  const Vec3 tip{centre[0] + 1.0, centre[1] - 1.0, centre[2]};
+  const std::string dir = directory + "/";
+  imaging::writeVolume(sample(phantom, c.grid), dir + "pre.nrrd");
+  imaging::writeVolume(sample(phantom, c.grid, move, {move.apply(tip), c.cementRadiusMm, 3000.0}),
+                       dir + "post.nrrd");
+  imaging::writeVolume(
+      sample(phantom, c.grid, {}, {{tip[0] + c.simOffsetMm, tip[1], tip[2]}, c.simRadiusMm, 2500.0}),
+      dir + "sim.nrrd");
+  return tip;
 }
 
 } // namespace cementsph::testing

@@ -84,4 +84,18 @@ RegistrationCase makeRegistrationCase(unsigned n, double spacingMm, const Vec3& 
                                       const std::array<double, 9>& direction = {1, 0, 0, 0, 1, 0, 0, 0, 1},
                                       unsigned seed = 7);
 
+// A case for `cementsph compare`, written into a directory: pre.nrrd (the phantom), post.nrrd (the
+// phantom moved by rotation/scale/translation, with a 3000 HU cement ball of cementRadiusMm at the
+// moved injection point) and sim.nrrd (on pre's grid: a 2500 HU ball of simRadiusMm, simOffsetMm
+// along x from the injection point). The injection point is 1 mm off the grid centre.
+struct CompareCase {
+  Grid grid;
+  Vec3 semiAxesMm{17, 16, 17};
+  unsigned seed = 5;
+  Vec3 rotationDeg{3, -2, 4}, scale{1.01, 0.99, 1.0}, translationMm{2.0, -1.5, 1.0};
+  double cementRadiusMm = 7.0, simRadiusMm = 7.5, simOffsetMm = 0.8;
+};
+// Returns the injection point (mm, pre's space).
+Vec3 writeCompareCase(const CompareCase& c, const std::string& directory);
+
 } // namespace cementsph::testing

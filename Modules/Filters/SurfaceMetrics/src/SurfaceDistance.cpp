@@ -103,11 +103,10 @@ struct TriangleSurface {
     locator->BuildLocator();
   }
 
-  // Per-thread scratch for distance(): the candidate list, and a stamp per triangle so that each
+  // Per-thread scratch for distance(): the candidate ids, and a stamp per triangle so that each
   // triangle is tested once per query without sorting.
   struct Scratch {
     vtkSmartPointer<vtkIdList> ids = vtkSmartPointer<vtkIdList>::New();
-    std::vector<std::pair<double, vtkIdType>> candidates;
     std::vector<unsigned> stamp;
     unsigned query = 0;
   };
@@ -122,20 +121,9 @@ struct TriangleSurface {
     double q[3] = {x[0], x[1], x[2]};
     const vtkIdType nearest = locator->FindClosestPoint(q);
     const V3 dn = sub(x, points[static_cast<std::size_t>(nearest)]);
-    double best2 = dot(dn, dn);
+    double best2 = dot(dn, dn); // the nearest vertex: an upper bound of the answer
     const double reach = longestEdge / std::sqrt(3.0) * (1.0 + 1e-9) + 1e-12;
-    locator->FindPointsWithinRadius(std::sqrt(best2) + reach, q, s.ids);
-    s.candidates.clear();
-    for (vtkIdType k = 0; k < s.ids->GetNumberOfIds(); ++k) {
-      const vtkIdType v = s.ids->GetId(k);
-      const V3 d = sub(x, points[static_cast<std::size_t>(v)]);
-      s.candidates.emplace_back(std::sqrt(dot(d, d)), v);
-    }
-    std::sort(s.candidates.begin(), s.candidates.end());
-    // Nearest vertices first; a vertex farther than best + reach cannot own a closer triangle.
-    for (const auto& [dw, v] : s.candidates) {
-      if (dw > std::sqrt(best2) + reach) break;
-      const auto vi = static_cast<std::size_t>(v);
+    auto testTrianglesOf = [&](std::size_t vi) {
       for (vtkIdType l = linkStart[vi]; l < linkStart[vi + 1]; ++l) {
         const auto t = static_cast<std::size_t>(links[static_cast<std::size_t>(l)]);
         if (s.stamp[t] == s.query) continue;
@@ -145,6 +133,17 @@ struct TriangleSurface {
                                                        points[static_cast<std::size_t>(tri[1])],
                                                        points[static_cast<std::size_t>(tri[2])]));
       }
+    };
+    // The nearest vertex's triangles first: they almost always hold the answer, so the bound below
+    // is tight and most other candidates are skipped without testing their triangles.
+    testTrianglesOf(static_cast<std::size_t>(nearest));
+    locator->FindPointsWithinRadius(std::sqrt(best2) + reach, q, s.ids);
+    for (vtkIdType k = 0; k < s.ids->GetNumberOfIds(); ++k) {
+      const auto vi = static_cast<std::size_t>(s.ids->GetId(k));
+      const V3 d = sub(x, points[vi]);
+      const double bound = std::sqrt(best2) + reach; // a vertex farther cannot own a closer triangle
+      if (dot(d, d) > bound * bound) continue;
+      testTrianglesOf(vi);
     }
     return std::sqrt(best2);
   }

@@ -15,6 +15,15 @@
 namespace cementsph::imaging {
 
 namespace {
+// A new image on reference's grid (contents undefined).
+template <typename TImage> typename TImage::Pointer allocateLike(const itk::ImageBase<3>* reference) {
+  auto image = TImage::New();
+  image->CopyInformation(reference);
+  image->SetRegions(reference->GetLargestPossibleRegion());
+  image->Allocate();
+  return image;
+}
+
 double voxelVolumeMm3(const itk::ImageBase<3>* image) {
   const auto s = image->GetSpacing();
   return s[0] * s[1] * s[2];
@@ -33,10 +42,7 @@ ImageType::Pointer differenceImage(const ImageType* post, const ImageType* pre) 
   if (!geometryOf(post).sameGrid(geometryOf(pre)))
     throw std::runtime_error("cement segmentation: post and pre volumes are not on one grid "
                              "(register and resample the post volume first)");
-  auto out = ImageType::New();
-  out->CopyInformation(pre);
-  out->SetRegions(pre->GetLargestPossibleRegion());
-  out->Allocate();
+  auto out = allocateLike<ImageType>(pre);
   const std::size_t n = pre->GetLargestPossibleRegion().GetNumberOfPixels();
   const float* a = post->GetBufferPointer();
   const float* b = pre->GetBufferPointer();
@@ -48,10 +54,7 @@ ImageType::Pointer differenceImage(const ImageType* post, const ImageType* pre) 
 SegmentationResult segmentCement(const ImageType* post, const ImageType* pre,
                                  const SegmentationOptions& options) {
   const ImageType::Pointer diff = differenceImage(post, pre);
-  auto candidate = MaskType::New();
-  candidate->CopyInformation(pre);
-  candidate->SetRegions(pre->GetLargestPossibleRegion());
-  candidate->Allocate();
+  auto candidate = allocateLike<MaskType>(pre);
   const std::size_t n = pre->GetLargestPossibleRegion().GetNumberOfPixels();
   {
     const float* d = diff->GetBufferPointer();
