@@ -106,10 +106,13 @@ INSTANTIATE_TEST_SUITE_P(Formats, FormatRoundTrip,
                            return n;
                          });
 
-TEST(VolumeIO, DicomSeriesKeepsHUAndGeometry) {
-  const fs::path dir = scratch("dicom");
+class DicomRoundTrip : public ::testing::TestWithParam<double> {};
+
+// HU survive a DICOM series through Rescale Intercept (0, and -1024 as scanners store it).
+TEST_P(DicomRoundTrip, KeepsHUAndGeometry) {
+  const fs::path dir = scratch("dicom" + std::to_string(static_cast<int>(-GetParam())));
   const auto image = obliqueVolume();
-  writeDicomSeries(image, (dir / "series").string());
+  writeDicomSeries(image, (dir / "series").string(), GetParam());
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "series"), fs::directory_iterator{}), 12);
   const auto back = readVolume((dir / "series").string());
   expectSameGeometry(geometryOf(image), geometryOf(back), 1e-4);
@@ -117,6 +120,8 @@ TEST(VolumeIO, DicomSeriesKeepsHUAndGeometry) {
   for (std::size_t i = 0; i < n; ++i)
     ASSERT_FLOAT_EQ(image->GetBufferPointer()[i], back->GetBufferPointer()[i]) << "voxel " << i;
 }
+
+INSTANTIATE_TEST_SUITE_P(Intercepts, DicomRoundTrip, ::testing::Values(0.0, -1024.0));
 
 TEST(VolumeIO, MissingFileIsAClearError) {
   try {

@@ -35,7 +35,7 @@ private:
 };
 } // namespace
 
-void writeDicomSeries(const ImageType* image, const std::string& directory) {
+void writeDicomSeries(const ImageType* image, const std::string& directory, double rescaleInterceptHU) {
   namespace fs = std::filesystem;
   using ShortImage = itk::Image<std::int16_t, 3>;
   using SliceImage = itk::Image<std::int16_t, 2>;
@@ -43,7 +43,9 @@ void writeDicomSeries(const ImageType* image, const std::string& directory) {
   fs::create_directories(directory, ec);
   if (ec) throw std::runtime_error(directory + ": cannot create directory: " + ec.message());
 
-  // HU to int16 (rounded, clamped); slope 1, intercept 0.
+  // HU as int16 (rounded, clamped). GDCMImageIO applies the inverse of the Rescale Slope/Intercept
+  // found in the dictionary on write (ITK 4.7 migration note "Apply Rescale Slope / Intercept On
+  // Write"): it stores HU - intercept itself. Measured: subtracting here too shifted the values.
   auto hu = ShortImage::New();
   hu->CopyInformation(image);
   hu->SetRegions(image->GetLargestPossibleRegion());
@@ -85,7 +87,7 @@ void writeDicomSeries(const ImageType* image, const std::string& directory) {
     itk::EncapsulateMetaData<std::string>(d, "0020|0032", ipp);
     itk::EncapsulateMetaData<std::string>(d, "0020|0037", iop.str());
     itk::EncapsulateMetaData<std::string>(d, "0018|0050", num(image->GetSpacing()[2]));
-    itk::EncapsulateMetaData<std::string>(d, "0028|1052", "0");
+    itk::EncapsulateMetaData<std::string>(d, "0028|1052", num(rescaleInterceptHU));
     itk::EncapsulateMetaData<std::string>(d, "0028|1053", "1");
     char name[32];
     std::snprintf(name, sizeof name, "slice%04u.dcm", z);

@@ -38,8 +38,10 @@ ImageType::Pointer readVolume(const std::string& path);
 void writeVolume(const ImageType* image, const std::string& path);
 void writeMask(const MaskType* mask, const std::string& path);
 
-// Writes a DICOM series (one file per slice, int16 HU, CT modality) into directory, which is
-// created. Used to export and by the tests; geometry goes into Image Position/Orientation Patient.
-void writeDicomSeries(const ImageType* image, const std::string& directory);
+// Writes a DICOM series (one file per slice, int16, CT modality) into directory, which is created.
+// Stored values are HU - rescaleInterceptHU (scanners commonly store with intercept -1024); the
+// Rescale Intercept tag says so. Geometry goes into Image Position / Orientation Patient.
+void writeDicomSeries(const ImageType* image, const std::string& directory,
+                      double rescaleInterceptHU = 0.0);
 
 } // namespace cementsph::imaging
