@@ -3,6 +3,8 @@
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
 #include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
+#include <vtkPoints.h>
 #include <vtkIdList.h>
 #include <vtkPointData.h>
 #include <vtkSmartPointer.h>
@@ -157,13 +159,21 @@ std::vector<double> vertexDistances(vtkPolyData* from, vtkPolyData* to) {
   const TriangleSurface target(to);
   const vtkIdType n = from->GetNumberOfPoints();
   std::vector<double> distances(static_cast<std::size_t>(n));
+  // Flying edges writes float points: read them directly rather than through a virtual GetPoint.
+  auto* floatArray = vtkFloatArray::SafeDownCast(from->GetPoints()->GetData());
+  const float* floats = floatArray && floatArray->GetNumberOfComponents() == 3 ? floatArray->GetPointer(0) : nullptr;
 #pragma omp parallel
   {
     TriangleSurface::Scratch scratch;
 #pragma omp for schedule(dynamic, 1024)
     for (vtkIdType i = 0; i < n; ++i) {
       V3 x;
-      from->GetPoint(i, x.data());
+      if (floats) {
+        const float* f = floats + 3 * i;
+        x = {f[0], f[1], f[2]};
+      } else {
+        from->GetPoint(i, x.data());
+      }
       distances[static_cast<std::size_t>(i)] = target.distance(x, scratch);
     }
   }
