@@ -70,6 +70,10 @@ struct TriangleSurface {
   std::vector<std::array<vtkIdType, 3>> triangles;
   std::vector<vtkIdType> linkStart, links; // CSR: triangles of vertex v are links[linkStart[v]..]
   double longestEdge = 0.0;
+  // Per vertex: every point of a triangle of v lies within reachOf[v] of one of that triangle's
+  // vertices (the largest incident triangle's longest edge / sqrt(3)); a tighter bound than the
+  // global L / sqrt(3) when deciding whether v's triangles can hold a closer point.
+  std::vector<double> reachOf;
   vtkSmartPointer<vtkStaticPointLocator> locator;
 
   explicit TriangleSurface(vtkPolyData* surface) {
@@ -95,11 +99,17 @@ struct TriangleSurface {
       for (vtkIdType v : triangles[t]) {
         links[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<vtkIdType>(t);
       }
-    for (const auto& t : triangles)
+    reachOf.assign(static_cast<std::size_t>(np), 0.0);
+    for (const auto& t : triangles) {
+      double edge = 0.0;
       for (int e = 0; e < 3; ++e) {
         const V3 d = sub(points[static_cast<std::size_t>(t[e])], points[static_cast<std::size_t>(t[(e + 1) % 3])]);
-        longestEdge = std::max(longestEdge, std::sqrt(dot(d, d)));
+        edge = std::max(edge, std::sqrt(dot(d, d)));
       }
+      longestEdge = std::max(longestEdge, edge);
+      const double r = edge / std::sqrt(3.0) * (1.0 + 1e-9) + 1e-12;
+      for (vtkIdType v : t) reachOf[static_cast<std::size_t>(v)] = std::max(reachOf[static_cast<std::size_t>(v)], r);
+    }
     locator = vtkSmartPointer<vtkStaticPointLocator>::New();
     locator->SetDataSet(surface);
     locator->BuildLocator();
@@ -143,7 +153,8 @@ struct TriangleSurface {
     for (vtkIdType k = 0; k < s.ids->GetNumberOfIds(); ++k) {
       const auto vi = static_cast<std::size_t>(s.ids->GetId(k));
       const V3 d = sub(x, points[vi]);
-      const double bound = std::sqrt(best2) + reach; // a vertex farther cannot own a closer triangle
+      // The closest triangle has a vertex w with |x - w| <= d + reachOf[w] <= best + reachOf[w].
+      const double bound = std::sqrt(best2) + reachOf[vi];
       if (dot(d, d) > bound * bound) continue;
       testTrianglesOf(vi);
     }
