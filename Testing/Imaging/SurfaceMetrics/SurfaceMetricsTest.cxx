@@ -7,10 +7,13 @@
 
 #include <gtest/gtest.h>
 #include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkStaticCellLocator.h>
 
 #include <cmath>
 #include <functional>
 #include <iostream>
+#include <random>
 
 using namespace cementsph::surfacemetrics;
 
@@ -85,6 +88,33 @@ TEST(SurfaceDistance, LargerMeanRulePicksTheRightDirection) {
   EXPECT_EQ(swapped.errorDirection, "a_to_b");
   EXPECT_DOUBLE_EQ(swapped.errorMm, cmp.errorMm);
   EXPECT_DOUBLE_EQ(swapped.hausdorffMm, cmp.hausdorffMm);
+}
+
+// The exact point-to-surface search (vertex grid + vertex-triangle links) against VTK's cell
+// locator, on query points scattered inside, on and far outside a lobed surface.
+TEST(SurfaceDistance, MatchesVtkCellLocatorOnScatteredPoints) {
+  const double h = 0.5;
+  auto inA = ball({10 * h, 12 * h, 12 * h}, 7 * h);
+  auto inB = ball({17 * h, 12 * h, 12 * h}, 4 * h);
+  auto surface = isosurface(voxelise(26, h, [&](const Point3& p) { return inA(p) || inB(p); }));
+  auto queries = vtkSmartPointer<vtkPolyData>::New();
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-20.0, 33.0);
+  for (int i = 0; i < 3000; ++i) points->InsertNextPoint(u(rng) * h, u(rng) * h, u(rng) * h);
+  queries->SetPoints(points);
+  const std::vector<double> d = vertexDistances(queries, surface);
+  auto locator = vtkSmartPointer<vtkStaticCellLocator>::New();
+  locator->SetDataSet(surface);
+  locator->BuildLocator();
+  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
+    double x[3], closest[3], dist2 = 0;
+    vtkIdType cellId;
+    int subId;
+    points->GetPoint(i, x);
+    locator->FindClosestPoint(x, closest, cellId, subId, dist2);
+    ASSERT_NEAR(d[static_cast<std::size_t>(i)], std::sqrt(dist2), 1e-9) << "query " << i;
+  }
 }
 
 TEST(SurfaceDistance, SummaryOfKnownValues) {

@@ -5,14 +5,14 @@
 #include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
 #include <vtkPoints.h>
-#include <vtkIdList.h>
 #include <vtkPointData.h>
 #include <vtkSmartPointer.h>
-#include <vtkStaticPointLocator.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -58,8 +58,106 @@ double pointTriangleDistance2(const V3& p, const V3& a, const V3& b, const V3& c
   return dist2({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
 }
 
-// A triangle surface prepared for exact point-to-surface queries: vertices in a static point
-// locator, vertex -> triangle links, and the longest edge L. For a query x with nearest vertex at
+// A uniform grid of the surface's vertices (compressed rows: the vertices of cell c are
+// ids[start[c] .. start[c+1])). Plain arrays and no virtual calls: the two queries below were
+// most of the cost through vtkStaticPointLocator.
+class VertexGrid {
+public:
+  VertexGrid(const std::vector<V3>& points, double cellSize) : points_(points) {
+    V3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (const V3& p : points)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], p[a]);
+        hi[a] = std::max(hi[a], p[a]);
+      }
+    double extent = 0.0;
+    for (int a = 0; a < 3; ++a) extent = std::max(extent, hi[a] - lo[a]);
+    h_ = std::max(cellSize, extent / 512.0); // at most 512 cells along an axis
+    h_ = std::max(h_, 1e-9);
+    origin_ = lo;
+    for (int a = 0; a < 3; ++a) dims_[a] = static_cast<long>(std::floor((hi[a] - lo[a]) / h_)) + 1;
+    start_.assign(static_cast<std::size_t>(dims_[0] * dims_[1] * dims_[2]) + 1, 0);
+    for (const V3& p : points) ++start_[cellOf(p) + 1];
+    for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    ids_.resize(points.size());
+    std::vector<long> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      ids_[static_cast<std::size_t>(fill[cellOf(points[i])]++)] = static_cast<vtkIdType>(i);
+  }
+
+  // Nearest vertex to x: rings of cells around x's (clamped) cell, until a ring cannot be closer.
+  vtkIdType nearest(const V3& x, double& best2) const {
+    long c[3];
+    clampedCell(x, c);
+    vtkIdType best = -1;
+    best2 = std::numeric_limits<double>::infinity();
+    const long maxRing = std::max({dims_[0], dims_[1], dims_[2]});
+    for (long r = 0; r <= maxRing; ++r) {
+      const double ringLow = static_cast<double>(r - 1) * h_; // ring r is at least this far from x
+      if (r > 0 && ringLow > 0 && ringLow * ringLow > best2) break;
+      for (long k = c[2] - r; k <= c[2] + r; ++k) {
+        if (k < 0 || k >= dims_[2]) continue;
+        for (long j = c[1] - r; j <= c[1] + r; ++j) {
+          if (j < 0 || j >= dims_[1]) continue;
+          // On the ring's shell: every i when j or k is on it, else only the two ends.
+          const bool shellJK = std::abs(k - c[2]) == r || std::abs(j - c[1]) == r;
+          const long step = shellJK || r == 0 ? 1 : 2 * r;
+          for (long i = c[0] - r; i <= c[0] + r; i += step) {
+            if (i < 0 || i >= dims_[0]) continue;
+            const auto cell = static_cast<std::size_t>((k * dims_[1] + j) * dims_[0] + i);
+            for (long n = start_[cell]; n < start_[cell + 1]; ++n) {
+              const vtkIdType v = ids_[static_cast<std::size_t>(n)];
+              const V3 d = sub(x, points_[static_cast<std::size_t>(v)]);
+              const double d2 = dot(d, d);
+              if (d2 < best2) {
+                best2 = d2;
+                best = v;
+              }
+            }
+          }
+        }
+      }
+    }
+    return best;
+  }
+
+  // Calls f(v) for every vertex within radius of x (and possibly a few beyond: callers re-check).
+  template <typename F> void withinBox(const V3& x, double radius, F&& f) const {
+    long lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0L, static_cast<long>(std::floor((x[a] - radius - origin_[a]) / h_)));
+      hi[a] = std::min(dims_[a] - 1, static_cast<long>(std::floor((x[a] + radius - origin_[a]) / h_)));
+      if (lo[a] > hi[a]) return;
+    }
+    for (long k = lo[2]; k <= hi[2]; ++k)
+      for (long j = lo[1]; j <= hi[1]; ++j) {
+        const long row = (k * dims_[1] + j) * dims_[0];
+        for (long n = start_[static_cast<std::size_t>(row + lo[0])]; n < start_[static_cast<std::size_t>(row + hi[0]) + 1]; ++n)
+          f(ids_[static_cast<std::size_t>(n)]);
+      }
+  }
+
+private:
+  std::size_t cellOf(const V3& p) const {
+    long c[3];
+    clampedCell(p, c);
+    return static_cast<std::size_t>((c[2] * dims_[1] + c[1]) * dims_[0] + c[0]);
+  }
+  void clampedCell(const V3& p, long* c) const {
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::clamp(static_cast<long>(std::floor((p[a] - origin_[a]) / h_)), 0L, dims_[a] - 1);
+  }
+
+  const std::vector<V3>& points_;
+  V3 origin_{};
+  double h_ = 1.0;
+  long dims_[3] = {1, 1, 1};
+  std::vector<long> start_;
+  std::vector<vtkIdType> ids_;
+};
+
+// A triangle surface prepared for exact point-to-surface queries: vertices in a uniform grid,
+// vertex -> triangle links, and the longest edge L. For a query x with nearest vertex at
 // distance dv, the closest surface point lies in a triangle T at distance d <= dv, and every point
 // of T is within L / sqrt(3) of one of T's vertices, so T has a vertex within dv + L / sqrt(3) of
 // x: the triangles linked to the vertices in that ball contain the answer. Exact, and much faster
@@ -74,7 +172,7 @@ struct TriangleSurface {
   // vertices (the largest incident triangle's longest edge / sqrt(3)); a tighter bound than the
   // global L / sqrt(3) when deciding whether v's triangles can hold a closer point.
   std::vector<double> reachOf;
-  vtkSmartPointer<vtkStaticPointLocator> locator;
+  std::unique_ptr<VertexGrid> grid;
 
   explicit TriangleSurface(vtkPolyData* surface) {
     const vtkIdType np = surface->GetNumberOfPoints();
@@ -110,30 +208,25 @@ struct TriangleSurface {
       const double r = edge / std::sqrt(3.0) * (1.0 + 1e-9) + 1e-12;
       for (vtkIdType v : t) reachOf[static_cast<std::size_t>(v)] = std::max(reachOf[static_cast<std::size_t>(v)], r);
     }
-    locator = vtkSmartPointer<vtkStaticPointLocator>::New();
-    locator->SetDataSet(surface);
-    locator->BuildLocator();
+    grid = std::make_unique<VertexGrid>(points, longestEdge);
   }
 
   // Per-thread scratch for distance(): the candidate ids, and a stamp per triangle so that each
   // triangle is tested once per query without sorting.
   struct Scratch {
-    vtkSmartPointer<vtkIdList> ids = vtkSmartPointer<vtkIdList>::New();
     std::vector<unsigned> stamp;
     unsigned query = 0;
   };
 
-  // Thread-safe: the static locator's queries are, and the scratch is the caller's.
+  // Thread-safe: the grid is read-only, and the scratch is the caller's.
   double distance(const V3& x, Scratch& s) const {
     if (s.stamp.size() != triangles.size()) s.stamp.assign(triangles.size(), 0);
     if (++s.query == 0) { // wrapped: reset the stamps
       std::fill(s.stamp.begin(), s.stamp.end(), 0u);
       s.query = 1;
     }
-    double q[3] = {x[0], x[1], x[2]};
-    const vtkIdType nearest = locator->FindClosestPoint(q);
-    const V3 dn = sub(x, points[static_cast<std::size_t>(nearest)]);
-    double best2 = dot(dn, dn); // the nearest vertex: an upper bound of the answer
+    double best2 = 0.0; // the nearest vertex's distance: an upper bound of the answer
+    const vtkIdType nearest = grid->nearest(x, best2);
     const double reach = longestEdge / std::sqrt(3.0) * (1.0 + 1e-9) + 1e-12;
     auto testTrianglesOf = [&](std::size_t vi) {
       for (vtkIdType l = linkStart[vi]; l < linkStart[vi + 1]; ++l) {
@@ -149,15 +242,13 @@ struct TriangleSurface {
     // The nearest vertex's triangles first: they almost always hold the answer, so the bound below
     // is tight and most other candidates are skipped without testing their triangles.
     testTrianglesOf(static_cast<std::size_t>(nearest));
-    locator->FindPointsWithinRadius(std::sqrt(best2) + reach, q, s.ids);
-    for (vtkIdType k = 0; k < s.ids->GetNumberOfIds(); ++k) {
-      const auto vi = static_cast<std::size_t>(s.ids->GetId(k));
+    grid->withinBox(x, std::sqrt(best2) + reach, [&](vtkIdType v) {
+      const auto vi = static_cast<std::size_t>(v);
       const V3 d = sub(x, points[vi]);
       // The closest triangle has a vertex w with |x - w| <= d + reachOf[w] <= best + reachOf[w].
       const double bound = std::sqrt(best2) + reachOf[vi];
-      if (dot(d, d) > bound * bound) continue;
-      testTrianglesOf(vi);
-    }
+      if (dot(d, d) <= bound * bound) testTrianglesOf(vi);
+    });
     return std::sqrt(best2);
   }
 };
