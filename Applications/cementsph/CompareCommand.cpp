@@ -100,7 +100,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
       ->required();
   sub.add_option("--post", a->post, "Post-injection CT (file or DICOM directory)")->required();
   sub.add_option("--simulated", a->simulated,
-                 "Simulated post-injection CT on the pre CT's grid (e.g. from `cementsph voxelise`)");
+                 "Simulated post-injection CT (voxelised particles, HU) on the pre CT's grid");
   sub.add_option("--injection-point-mm", a->injection,
                  "Injection point (cannula tip) in the pre CT's physical space, mm: x,y,z")
       ->required()
