@@ -89,6 +89,7 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
     itk::EncapsulateMetaData<std::string>(d, "0018|0050", num(image->GetSpacing()[2]));
     itk::EncapsulateMetaData<std::string>(d, "0028|1052", num(rescaleInterceptHU));
     itk::EncapsulateMetaData<std::string>(d, "0028|1053", "1");
+    itk::EncapsulateMetaData<std::string>(d, "0028|0004", "MONOCHROME2"); // grey levels, bright = dense
     char name[32];
     std::snprintf(name, sizeof name, "slice%04u.dcm", z);
     files[z] = (fs::path(directory) / name).string();
