@@ -6,6 +6,7 @@
 #include "cementsph/imaging/AffineRegistration.h"
 #include "cementsph/imaging/VolumeIO.h"
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -36,6 +37,11 @@ cementsph::app::CommandRunner setupRegister(CLI::App& sub) {
     RegistrationOptions options;
     options.maskCement = !args->noCementMask;
     const RegistrationResult result = registerAffine(fixed, moving, options);
+    // Output folders are made only once the registration has succeeded: a failed run leaves nothing.
+    for (const std::string& out : {args->transformOut, args->imageOut}) {
+      const std::filesystem::path parent = std::filesystem::path(out).parent_path();
+      if (!out.empty() && !parent.empty()) std::filesystem::create_directories(parent);
+    }
     writeTransform(result.transform, args->transformOut);
     if (!args->imageOut.empty()) writeVolume(resampleOnto(moving, fixed, result.transform), args->imageOut);
     std::cout << "registration (moving -> fixed):\n" << formatRegistrationReport(result);

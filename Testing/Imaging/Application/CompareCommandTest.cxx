@@ -224,3 +224,17 @@ TEST(CompareCommandExample, ReadmeCommandOnBundledDicomAndNrrd) {
   EXPECT_GT(m["cement_volume_ml"].get<double>(), 0.697);
   EXPECT_LT(m["cement_volume_ml"].get<double>(), 0.905 * 1.1);
 }
+
+TEST(CompareCommandExample, RegisterCreatesItsOutputFolder) {
+  const fs::path data = fs::path(CEMENTSPH_TEST_DATA_DIR) / "compare-example";
+  const fs::path scratch = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "register-example";
+  fs::remove_all(scratch);
+  fs::create_directories(scratch);
+  const fs::path out = scratch / "not" / "yet";
+  const ProgramRun r = run("register --pre " + (data / "pre.nrrd").string() + " --post " + (data / "post_dicom").string() +
+                               " --out-transform " + (out / "t.tfm").string() + " --out-image " + (out / "r.nrrd").string(),
+                           scratch);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "t.tfm"));
+  EXPECT_TRUE(fs::exists(out / "r.nrrd"));
+}
