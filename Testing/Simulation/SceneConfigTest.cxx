@@ -43,6 +43,7 @@ TEST(SceneConfig, PaperPresetHoldsThePapersValues) {
   EXPECT_DOUBLE_EQ(s.thresholdHu, 0.0);
   EXPECT_DOUBLE_EQ(s.roiSizeMm, 40.0);
   EXPECT_DOUBLE_EQ(s.snapshotIntervalS, 1.0);
+  EXPECT_DOUBLE_EQ(s.solidMassFactor, 8.0);
   EXPECT_EQ(*s.tipMm, Eigen::Vector3d(1, 2, 3));
 }
 
@@ -52,7 +53,7 @@ TEST(SceneConfig, EveryKeyIsReadAndOverridesWin) {
                   {"cannula_length_mm", 20}, {"cannula_wall", false}, {"flow_rate_ml_per_s", 0.1},
                   {"volume_ml", 2}, {"viscosity_pa_s", 50}, {"viscosity_rate_pa_per_s", 25},
                   {"threshold_hu", 200}, {"roi_size_mm", 30}, {"snapshot_interval_s", 0.5},
-                  {"drag_coefficient", 4.0}, {"sound_speed_m_per_s", 2.0}, {"integrator", "overdamped"}};
+                  {"drag_coefficient", 4.0}, {"sound_speed_m_per_s", 2.0}, {"solid_mass_factor", 3.0}, {"integrator", "overdamped"}};
   const SceneConfig s = sceneFromJson(j, {"volume_ml=0.2", "cannula_wall=true", "integrator=explicit"});
   EXPECT_EQ(s.modelPreset, "paper");
   EXPECT_DOUBLE_EQ(s.particleRadiusMm, 0.5);
@@ -68,6 +69,7 @@ TEST(SceneConfig, EveryKeyIsReadAndOverridesWin) {
   EXPECT_DOUBLE_EQ(s.roiSizeMm, 30.0);
   EXPECT_DOUBLE_EQ(s.snapshotIntervalS, 0.5);
   EXPECT_DOUBLE_EQ(*s.dragCoefficient, 4.0);
+  EXPECT_DOUBLE_EQ(s.solidMassFactor, 3.0);
   EXPECT_DOUBLE_EQ(*s.soundSpeedMPerS, 2.0);
   // Round trip through toJson.
   const SceneConfig r = sceneFromJson(toJson(s));
@@ -104,7 +106,7 @@ TEST(SceneConfig, MissingValuesAreNamed) {
 TEST(SceneConfig, OutOfRangeValuesAreNamed) {
   for (const char* key : {"particle_radius_mm", "viscosity_pa_s", "viscosity_rate_pa_per_s", "flow_rate_ml_per_s",
                           "volume_ml", "cannula_inner_diameter_mm", "cannula_length_mm", "roi_size_mm",
-                          "snapshot_interval_s", "drag_coefficient", "sound_speed_m_per_s"}) {
+                          "snapshot_interval_s", "solid_mass_factor", "drag_coefficient", "sound_speed_m_per_s"}) {
     for (double bad : {0.0, -1.0}) {
       json j = minimal();
       j[key] = bad;

@@ -29,8 +29,8 @@ bool PorousSolid::voxelOf(const Eigen::Vector3d& p, std::array<int, 3>& ijk) con
 
 PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d& tipMm, const PorousSolidOptions& o) {
   if (!ct) throw std::invalid_argument("CT: no image");
-  if (!(o.roiSizeMm > 0) || !(o.reachMm > 0) || !(o.restDensity > 0))
-    throw std::invalid_argument("porous solid: roi size, reach and rest density must be > 0");
+  if (!(o.roiSizeMm > 0) || !(o.reachMm > 0) || !(o.restDensity > 0) || !(o.massFactor > 0))
+    throw std::invalid_argument("porous solid: roi size, reach, rest density and mass factor must be > 0");
   const auto& dir = ct->GetDirection();
   for (unsigned r = 0; r < 3; ++r)
     for (unsigned c = 0; c < 3; ++c)
@@ -164,7 +164,7 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
       for (int i = 0; i < nx; ++i)
         if (keep[s.grid.index(i, j, k)]) s.positions.push_back(s.grid.centre(i, j, k));
   s.keptVoxels = s.positions.size();
-  s.particleMass = o.restDensity * s.grid.voxelVolume();
+  s.particleMass = o.massFactor * o.restDensity * s.grid.voxelVolume();
   return s;
 }
 

@@ -94,6 +94,7 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "threshold_hu") s.thresholdHu = number(v, key);
     else if (key == "roi_size_mm") s.roiSizeMm = number(v, key);
     else if (key == "snapshot_interval_s") s.snapshotIntervalS = number(v, key);
+    else if (key == "solid_mass_factor") s.solidMassFactor = number(v, key);
     else if (key == "drag_coefficient") s.dragCoefficient = number(v, key);
     else if (key == "sound_speed_m_per_s") s.soundSpeedMPerS = number(v, key);
     else if (key == "integrator") {
@@ -147,6 +148,7 @@ void SceneConfig::validate() const {
   requirePositive(roiSizeMm, "roi_size_mm");
   if (roiSizeMm < 4 * spacingM() * 1e3) fail("roi_size_mm", "must be at least 4 particle diameters");
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
+  requirePositive(solidMassFactor, "solid_mass_factor");
   if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
   if (soundSpeedMPerS) requirePositive(*soundSpeedMPerS, "sound_speed_m_per_s");
 }
@@ -198,6 +200,7 @@ json toJson(const SceneConfig& s) {
   j["threshold_hu"] = s.thresholdHu;
   j["roi_size_mm"] = s.roiSizeMm;
   j["snapshot_interval_s"] = s.snapshotIntervalS;
+  j["solid_mass_factor"] = s.solidMassFactor;
   if (s.dragCoefficient) j["drag_coefficient"] = *s.dragCoefficient;
   if (s.soundSpeedMPerS) j["sound_speed_m_per_s"] = *s.soundSpeedMPerS;
   if (s.integrator) j["integrator"] = *s.integrator;

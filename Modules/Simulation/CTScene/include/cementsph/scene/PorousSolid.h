@@ -31,6 +31,7 @@ struct PorousSolidOptions {
   double roiSizeMm = 40.0;
   double reachMm = 2.28;              // kernel support 2h [mm]
   double restDensity = 1180.0;        // rho0 [kg/m^3]
+  double massFactor = 1.0;            // particle mass = factor rho0 V_voxel
   double requiredPoreVolumeMm3 = 0.0; // connected pore space about the tip must hold at least this
 };
 

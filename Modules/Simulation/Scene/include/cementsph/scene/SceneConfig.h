@@ -17,6 +17,9 @@
 //   threshold_hu                    solid where HU > threshold                              paper 0
 //   roi_size_mm                     edge of the cube about the tip that is modelled         paper 40
 //   snapshot_interval_s                                                                     1
+//   solid_mass_factor               fixed particle mass = factor rho0 V_voxel (> 0)          8
+//                                   (ours, not the paper's: at factor 1 the compressed cloud, ~1.4 kPa against
+//                                   rho0 cs^2 = 1.18 kPa, entered the solid; docs/scene-figures.md)
 //   drag_coefficient, sound_speed_m_per_s, integrator   override the model preset
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
@@ -51,6 +54,7 @@ struct SceneConfig {
   double thresholdHu = 0.0;
   double roiSizeMm = 40.0;
   double snapshotIntervalS = 1.0;
+  double solidMassFactor = 8.0;
   std::optional<double> dragCoefficient;
   std::optional<double> soundSpeedMPerS;
   std::optional<std::string> integrator;
