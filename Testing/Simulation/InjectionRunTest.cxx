@@ -5,6 +5,7 @@
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/InjectionRunner.h"
+#include "ScaffoldCT.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -26,26 +27,9 @@ const int kOneThread = [] {
   return 1;
 }();
 
-// 40^3 voxels of 0.5 mm (20 mm cube) at the origin: rods 3 voxels (1.5 mm) thick every 10 voxels (5 mm)
-// along x, y and z, 1000 HU; pores (3.5 mm wide) at -100 HU. Solid voxels: exact count below.
-bool rod(int i, int j, int k) {
-  const bool a = i % 10 < 3, b = j % 10 < 3, c = k % 10 < 3;
-  return (a && b) || (b && c) || (a && c);
-}
-ImageType::Pointer scaffold() {
-  auto img = ImageType::New();
-  ImageType::RegionType region;
-  ImageType::SizeType size;
-  size.Fill(40);
-  region.SetSize(size);
-  img->SetRegions(region);
-  img->SetSpacing(0.5);
-  img->Allocate();
-  for (int k = 0; k < 40; ++k)
-    for (int j = 0; j < 40; ++j)
-      for (int i = 0; i < 40; ++i) img->SetPixel({{i, j, k}}, rod(i, j, k) ? 1000.f : -100.f);
-  return img;
-}
+// scaffold(): 40^3 voxels of 0.5 mm (20 mm cube) at the origin: rods 3 voxels (1.5 mm) thick every 10 voxels
+// (5 mm) along x, y and z, 1000 HU; pores (3.5 mm wide) at -100 HU.
+using cementsph::scene::testing::scaffold;
 } // namespace
 
 TEST(InjectionRun, ShortInjectionIntoAScaffold) {
