@@ -140,6 +140,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const bool tty = o.progress && isatty(STDERR_FILENO);
   double nextSnapshot = scene.snapshotIntervalS;
   double nextReport = 0.0; // wall seconds
+  double nextFraction = 0.0;
   bool stopped = false;
   while (sim.time() < T) {
     viscosity.apply(sim, spec.startTime);
@@ -151,18 +152,20 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
       while (nextSnapshot <= sim.time()) nextSnapshot += scene.snapshotIntervalS;
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
-    if (wall >= nextReport) {
-      const double fraction = std::min(1.0, sim.time() / T);
-      if (o.progress) {
-        std::ostringstream line;
-        line << "inject: t " << fmt(sim.time()) << " / " << fmt(T) << " s, " << sim.fluid().size() << " fluid + "
-             << sim.fixed().size() << " fixed particles, " << sim.statistics().steps << " steps";
-        if (tty && fraction > 0) line << ", ETA " << fmt(wall * (1 - fraction) / fraction, 3) << " s";
-        if (tty) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
-        else std::cerr << line.str() << "\n";
-      }
+    const double fraction = std::min(1.0, sim.time() / T);
+    if (o.progress && wall >= nextReport) {
+      std::ostringstream line;
+      line << "inject: t " << fmt(sim.time()) << " / " << fmt(T) << " s, " << sim.fluid().size() << " fluid + "
+           << sim.fixed().size() << " fixed particles, " << sim.statistics().steps << " steps";
+      if (tty && fraction > 0) line << ", ETA " << fmt(wall * (1 - fraction) / fraction, 3) << " s";
+      if (tty) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
+      else std::cerr << line.str() << "\n";
       nextReport = wall + (tty ? 1.0 : 30.0);
-      if (o.onProgress && !o.onProgress(fraction)) {
+    }
+    // The callback: at the first step and every 1 % of the injection time.
+    if (o.onProgress && fraction >= nextFraction) {
+      nextFraction = fraction + 0.01;
+      if (!o.onProgress(fraction)) {
         stopped = true;
         break;
       }
@@ -243,6 +246,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   metrics["solid_mass_factor"] = scene.solidMassFactor;
   metrics["connected_pore_voxels"] = solid.connectedPoreVoxels;
   metrics["roi_voxels"] = {solid.roiSize[0], solid.roiSize[1], solid.roiSize[2]};
+  metrics["roi_start_index"] = {solid.roiStart[0], solid.roiStart[1], solid.roiStart[2]}; // relative to the CT region start
   metrics["steps"] = st.steps;
   metrics["smallest_time_step_s"] = st.smallestStep;
   metrics["largest_time_step_s"] = st.largestStep;
