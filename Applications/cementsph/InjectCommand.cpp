@@ -4,9 +4,13 @@
 // simulated_ct.nrrd and scene.json (Modules/Simulation/CTScene/.../InjectionRunner.h; docs/scene-figures.md).
 #include "CommandRegistry.h"
 
+#include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
-#include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneConfig.h"
+#include "vtkSPHInjectionFilter.h"
+
+#include <nlohmann/json.hpp>
+#include <vtkSmartPointer.h>
 
 #include <omp.h>
 
@@ -60,12 +64,16 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
     if (!a->preset.empty()) overrides.push_back("preset=\"" + a->preset + "\"");
     const cementsph::scene::SceneConfig scene = cementsph::scene::loadSceneFile(a->scene, overrides);
     if (a->threads > 0) omp_set_num_threads(a->threads);
-    const auto ct = cementsph::imaging::readVolume(a->ct);
-    cementsph::scene::InjectionRunOptions o;
-    o.outDir = a->out;
-    o.progress = !a->quiet;
-    const auto r = cementsph::scene::runInjection(ct, scene, o);
-    const auto& m = r.metrics;
+    // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files.
+    const auto ct = cementsph::imaging::toVtk(cementsph::imaging::readVolume(a->ct));
+    auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
+    filter->SetInputDataObject(0, ct);
+    filter->SetScene(scene);
+    filter->SetOutputDirectory(a->out);
+    filter->SetPrintProgress(!a->quiet);
+    filter->Update();
+    filter->RethrowIfFailed();
+    const nlohmann::json m = nlohmann::json::parse(filter->GetMetricsJSON());
     std::cout << "injected " << m["volume_injected_ml"].get<double>() << " ml in " << m["steps"] << " steps, "
               << m["wall_time_s"].get<double>() << " s wall (real-time factor " << m["real_time_factor"].get<double>()
               << "); " << m["fluid_particles"] << " fluid, " << m["fixed_particles"] << " fixed particles ("
