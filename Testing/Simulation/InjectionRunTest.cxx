@@ -36,6 +36,8 @@ TEST(InjectionRun, ShortInjectionIntoAScaffold) {
   const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "inject-scaffold";
   fs::remove_all(out);
   std::vector<std::string> overrides;
+  // SCENE_OVERRIDE=key=value reruns the case with one scene key changed (the solid_mass_factor sweep of
+  // docs/scene-figures.md was taken this way); unset in ctest.
   if (const char* e = std::getenv("SCENE_OVERRIDE")) overrides.push_back(e);
   const SceneConfig scene = sceneFromJson(
       {{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.2}, {"snapshot_interval_s", 1.0}, {"cannula_length_mm", 5}}, overrides);
