@@ -1,0 +1,54 @@
+// The inject runner: a CT and a scene in, an injection simulation to the end of injection, files out.
+//
+// Assembly (as Testing/Core/SPH/InjectionScene.h, with the CT's porous solid): model preset (+ the scene's
+// overrides), d = 2r, h = (h/d) d; the porous solid of the ROI (PorousSolid.h) as fixed particles of mass
+// rho0 V_voxel; the cannula emitter (volume-exact, optional wall of length cannula_length_mm, clipped to the
+// ROI); the viscosity schedule applied each step; a six-point tip-pressure ring (TipPressureProbe). The
+// simulation box is the ROI: particles leaving it are removed and counted (possible leakage).
+//
+// Files in outDir (each written atomically, temporary name then rename):
+//   metrics.json        the run's figures (see docs/scene-figures.md)
+//   tip_pressure.csv    time_s, pressure_pa, pressure_minus_baseline_pa (baseline: mean of the first 0.5 s)
+//   particles_NNNN.vtp  every snapshot_interval_s and at the end; positions in mm (the CT's frame), point
+//                       arrays velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s
+//   particles.pvd       the ParaView series of the snapshots
+//   simulated_ct.nrrd   the CT's grid within the ROI: HU_sim = HU_pre + k rho_fluid / rho0, rho_fluid the Eq. 2
+//                       fluid density at the voxel centre with h = 2r (ParticleVoxeliser), k = 3000 HU
+//   scene.json          the scene as run (all values resolved)
+#pragma once
+
+#include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/scene/SceneConfig.h"
+#include "cementsph/sph/Particles.h"
+
+#include <nlohmann/json.hpp>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
+#include <functional>
+#include <string>
+
+namespace cementsph::scene {
+
+struct InjectionRunOptions {
+  std::string outDir;               // empty: write no files
+  double huPerRelativeDensity = 3000.0; // k of the simulated CT [HU]
+  bool progress = false;            // a progress line on stderr (with an ETA when stderr is a terminal)
+  // Called now and then with the fraction of injection time done (0..1); return false to stop the run.
+  std::function<bool(double)> onProgress;
+};
+
+struct InjectionRunResult {
+  nlohmann::json metrics;
+  imaging::ImageType::Pointer simulatedCt;   // ROI of the CT grid
+  vtkSmartPointer<vtkPolyData> particles;    // the final particles (mm, with the point arrays)
+};
+
+// Throws std::invalid_argument for a bad scene or CT/tip combination, sph::SimulationError if the run goes
+// unstable, std::runtime_error for output failures.
+InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig& scene, const InjectionRunOptions& options);
+
+// Fluid particles as points in mm with velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s.
+vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& fluid, double time);
+
+} // namespace cementsph::scene

@@ -1,0 +1,293 @@
+#include "cementsph/scene/InjectionRunner.h"
+
+#include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/PolyDataIO.h"
+#include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/PorousSolid.h"
+#include "cementsph/sph/CannulaEmitter.h"
+#include "cementsph/sph/ParticleVoxeliser.h"
+#include "cementsph/sph/Presets.h"
+#include "cementsph/sph/Simulation.h"
+#include "cementsph/sph/TipPressureProbe.h"
+
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+
+namespace cementsph::scene {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, double time) {
+  const vtkIdType n = vtkIdType(f.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  auto make = [n](const char* name, int components) {
+    auto a = vtkSmartPointer<vtkDoubleArray>::New();
+    a->SetName(name);
+    a->SetNumberOfComponents(components);
+    a->SetNumberOfTuples(n);
+    return a;
+  };
+  auto velocity = make("velocity_m_per_s", 3), density = make("density_kg_per_m3", 1),
+       pressure = make("pressure_pa", 1), age = make("age_s", 1);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  for (vtkIdType i = 0; i < n; ++i) {
+    const std::size_t k = std::size_t(i);
+    points->SetPoint(i, f.x[k] * 1e3, f.y[k] * 1e3, f.z[k] * 1e3);
+    velocity->SetTuple3(i, f.vx[k], f.vy[k], f.vz[k]);
+    density->SetValue(i, f.density[k]);
+    pressure->SetValue(i, f.pressure[k]);
+    age->SetValue(i, time - f.birthTime[k]);
+    verts->InsertNextCell(1, &i);
+  }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  poly->GetPointData()->AddArray(velocity);
+  poly->GetPointData()->AddArray(density);
+  poly->GetPointData()->AddArray(pressure);
+  poly->GetPointData()->AddArray(age);
+  return poly;
+}
+
+namespace {
+
+std::string fmt(double x, int precision = 4) {
+  std::ostringstream s;
+  s << std::setprecision(precision) << x;
+  return s.str();
+}
+
+double finiteOrZero(double x) { return std::isfinite(x) ? x : 0.0; }
+
+} // namespace
+
+InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig& scene, const InjectionRunOptions& o) {
+  scene.validate();
+  const auto wallStart = std::chrono::steady_clock::now();
+  sph::ModelPreset preset = sph::modelPreset(scene.modelPreset);
+  sph::ModelParameters m = preset.model;
+  if (scene.integrator) m.integrator = sph::parseIntegrator(*scene.integrator);
+  if (scene.dragCoefficient) m.dragCoefficient = *scene.dragCoefficient;
+  if (scene.soundSpeedMPerS) m.soundSpeed = *scene.soundSpeedMPerS;
+  const double d = scene.spacingM();
+  m.smoothingLength = preset.hOverD * d;
+  const double rho0 = m.restDensity;
+  const Eigen::Vector3d tipMm = *scene.tipMm;
+  const Eigen::Vector3d tip = tipMm * 1e-3;
+
+  PorousSolidOptions po;
+  po.thresholdHu = scene.thresholdHu;
+  po.roiSizeMm = scene.roiSizeMm;
+  po.reachMm = 2.0 * m.smoothingLength * 1e3;
+  po.restDensity = rho0;
+  po.massFactor = scene.solidMassFactor;
+  po.requiredPoreVolumeMm3 = scene.volumeMl * 1e3;
+  const PorousSolid solid = buildPorousSolid(ct, tipMm, po);
+
+  sph::CannulaSpec spec;
+  spec.tip = tip;
+  spec.direction = scene.direction;
+  spec.innerDiameter = scene.cannulaInnerDiameterMm * 1e-3;
+  spec.flowRate = scene.flowRateM3PerS();
+  spec.totalVolume = scene.volumeM3();
+  spec.spacing = d;
+  spec.restDensity = rho0;
+  spec.buildWall = scene.cannulaWall;
+  spec.wallLength = scene.cannulaLengthMm * 1e-3;
+  sph::CannulaEmitter emitter(spec);
+  const sph::ViscositySchedule viscosity = scene.viscositySchedule();
+  m.viscosity = viscosity.at(0.0);
+  m.maxTimeStep = emitter.maxTimeStep();
+
+  sph::Domain domain;
+  domain.lower = solid.lowerM;
+  domain.upper = solid.upperM;
+  sph::Simulation sim(m, domain);
+  sim.reserveFluid(emitter.totalParticles());
+  for (const Eigen::Vector3d& p : solid.positions) sim.addFixedParticle(p, solid.particleMass);
+  const std::size_t wallParticles = emitter.addWall(sim);
+  sph::TipPressureProbe probe(
+      sph::TipPressureProbe::ringAroundTip(tip, spec.direction, 0.5 * spec.innerDiameter, 6, d));
+
+  const bool writing = !o.outDir.empty();
+  if (writing) fs::create_directories(o.outDir);
+  std::vector<std::pair<double, std::string>> snapshots;
+  auto writeSnapshot = [&] {
+    if (!writing) return;
+    char name[64];
+    std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
+    imaging::writePolyData(particlesToPolyData(sim.fluid(), sim.time()), (fs::path(o.outDir) / name).string());
+    snapshots.emplace_back(sim.time(), name);
+  };
+
+  const double T = scene.injectionDurationS();
+  const bool tty = o.progress && isatty(STDERR_FILENO);
+  double nextSnapshot = scene.snapshotIntervalS;
+  double nextReport = 0.0; // wall seconds
+  double nextFraction = 0.0;
+  bool stopped = false;
+  while (sim.time() < T) {
+    viscosity.apply(sim, spec.startTime);
+    emitter.emit(sim);
+    sim.step();
+    probe.sample(sim);
+    if (sim.time() >= nextSnapshot && sim.time() < T) {
+      writeSnapshot();
+      while (nextSnapshot <= sim.time()) nextSnapshot += scene.snapshotIntervalS;
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+    const double fraction = std::min(1.0, sim.time() / T);
+    if (o.progress && wall >= nextReport) {
+      std::ostringstream line;
+      line << "inject: t " << fmt(sim.time()) << " / " << fmt(T) << " s, " << sim.fluid().size() << " fluid + "
+           << sim.fixed().size() << " fixed particles, " << sim.statistics().steps << " steps";
+      if (tty && fraction > 0) line << ", ETA " << fmt(wall * (1 - fraction) / fraction, 3) << " s";
+      if (tty) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
+      else std::cerr << line.str() << "\n";
+      nextReport = wall + (tty ? 1.0 : 30.0);
+    }
+    // The callback: at the first step and every 1 % of the injection time.
+    if (o.onProgress && fraction >= nextFraction) {
+      nextFraction = fraction + 0.01;
+      if (!o.onProgress(fraction)) {
+        stopped = true;
+        break;
+      }
+    }
+  }
+  if (!stopped) emitter.emit(sim); // the emission up to the end time
+  sim.updateDensityAndPressure();
+  if (tty) std::cerr << "\n";
+  const double wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+
+  // Figures.
+  const sph::FluidParticles& f = sim.fluid();
+  double fluidMass = 0, spread = 0;
+  std::size_t inSolid = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    fluidMass += f.mass[i];
+    spread += (f.position(i) - tip).norm();
+    std::array<int, 3> ijk{};
+    if (solid.voxelOf(f.position(i), ijk) && solid.solid[solid.grid.index(ijk[0], ijk[1], ijk[2])]) ++inSolid;
+  }
+  if (f.size() > 0) spread /= double(f.size());
+  const double emittedMass = double(emitter.emittedCount()) * emitter.particleMass();
+  const double escapedMass = double(sim.escapedCount()) * emitter.particleMass();
+  const double massBalance = emittedMass > 0 ? (emittedMass - fluidMass - escapedMass) / emittedMass : 0.0;
+  double finalPressure = std::numeric_limits<double>::quiet_NaN(), maxPressure = finalPressure, baseline = 0.0;
+  bool haveBaseline = false;
+  if (!probe.samples().empty()) {
+    finalPressure = probe.samples().back().meanPressure;
+    maxPressure = -std::numeric_limits<double>::infinity();
+    for (const auto& s : probe.samples()) maxPressure = std::max(maxPressure, s.meanPressure);
+    try {
+      baseline = probe.baseline();
+      haveBaseline = true;
+    } catch (const std::logic_error&) {
+    }
+  }
+
+  // Simulated CT on the CT's grid within the ROI.
+  const sph::ParticleVoxeliser voxeliser(solid.grid, 2.0 * scene.particleRadiusMm * 1e-3); // h = 2r
+  const std::vector<double> rho = voxeliser.density(f);
+  auto simCt = imaging::ImageType::New();
+  {
+    imaging::ImageType::RegionType region;
+    imaging::ImageType::SizeType size;
+    for (unsigned a = 0; a < 3; ++a) size[a] = itk::SizeValueType(solid.roiSize[a]);
+    region.SetSize(size);
+    simCt->SetRegions(region);
+    simCt->SetSpacing(ct->GetSpacing());
+    simCt->SetDirection(ct->GetDirection());
+    imaging::ImageType::PointType origin;
+    for (unsigned a = 0; a < 3; ++a) origin[a] = solid.grid.origin[int(a)] * 1e3;
+    simCt->SetOrigin(origin);
+    simCt->Allocate();
+    const auto start = ct->GetLargestPossibleRegion().GetIndex();
+    for (int k = 0; k < solid.grid.size[2]; ++k)
+      for (int j = 0; j < solid.grid.size[1]; ++j)
+        for (int i = 0; i < solid.grid.size[0]; ++i) {
+          imaging::ImageType::IndexType src;
+          src[0] = start[0] + solid.roiStart[0] + i;
+          src[1] = start[1] + solid.roiStart[1] + j;
+          src[2] = start[2] + solid.roiStart[2] + k;
+          const double hu = double(ct->GetPixel(src)) + o.huPerRelativeDensity * rho[solid.grid.index(i, j, k)] / rho0;
+          simCt->SetPixel({{i, j, k}}, float(hu));
+        }
+  }
+
+  const auto& st = sim.statistics();
+  json metrics;
+  metrics["volume_injected_ml"] = emitter.emittedVolume() * 1e6;
+  metrics["volume_requested_ml"] = scene.volumeMl;
+  metrics["simulated_time_s"] = sim.time();
+  metrics["stopped_early"] = stopped;
+  metrics["fluid_particles"] = f.size();
+  metrics["fixed_particles"] = sim.fixed().size();
+  metrics["cannula_wall_particles"] = wallParticles;
+  metrics["solid_voxels_kept"] = solid.keptVoxels;
+  metrics["solid_voxels_total"] = solid.solidVoxels;
+  metrics["solid_mass_factor"] = scene.solidMassFactor;
+  metrics["connected_pore_voxels"] = solid.connectedPoreVoxels;
+  metrics["roi_voxels"] = {solid.roiSize[0], solid.roiSize[1], solid.roiSize[2]};
+  metrics["roi_start_index"] = {solid.roiStart[0], solid.roiStart[1], solid.roiStart[2]}; // relative to the CT region start
+  metrics["steps"] = st.steps;
+  metrics["smallest_time_step_s"] = st.smallestStep;
+  metrics["largest_time_step_s"] = st.largestStep;
+  metrics["wall_time_s"] = wallS;
+  metrics["real_time_factor"] = wallS > 0 ? sim.time() / wallS : 0.0; // simulated seconds per wall second
+  metrics["integrator"] = sph::toString(m.integrator);
+  metrics["model_preset"] = preset.name;
+  metrics["smoothing_length_mm"] = m.smoothingLength * 1e3;
+  metrics["final_tip_pressure_pa"] = finiteOrZero(finalPressure);
+  metrics["max_tip_pressure_pa"] = finiteOrZero(maxPressure);
+  metrics["tip_pressure_baseline_pa"] = baseline;
+  metrics["mean_spreading_distance_mm"] = spread * 1e3;
+  metrics["escaped_particles"] = sim.escapedCount();
+  metrics["mass_balance_error"] = massBalance;
+  metrics["fluid_in_solid_fraction"] = f.size() == 0 ? 0.0 : double(inSolid) / double(f.size());
+  metrics["simulated_ct_hu_per_relative_density"] = o.huPerRelativeDensity;
+  metrics["final_viscosity_pa_s"] = sim.parameters().viscosity;
+
+  InjectionRunResult result;
+  result.particles = particlesToPolyData(f, sim.time());
+  result.simulatedCt = simCt;
+  if (writing) {
+    writeSnapshot();
+    std::ostringstream pvd;
+    pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+    for (const auto& [t, name] : snapshots)
+      pvd << "    <DataSet timestep=\"" << std::setprecision(10) << t << "\" part=\"0\" file=\"" << name << "\"/>\n";
+    pvd << "  </Collection>\n</VTKFile>\n";
+    imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), pvd.str());
+    std::ostringstream csv;
+    csv << "time_s,pressure_pa,pressure_minus_baseline_pa\n" << std::setprecision(10);
+    for (const auto& s : probe.samples())
+      csv << s.time << "," << s.meanPressure << "," << (haveBaseline ? s.meanPressure - baseline : 0.0) << "\n";
+    imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(), csv.str());
+    imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
+    imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");
+    metrics["snapshots"] = snapshots.size();
+    imaging::writeTextAtomically((fs::path(o.outDir) / "metrics.json").string(), metrics.dump(2) + "\n");
+  }
+  result.metrics = metrics;
+  return result;
+}
+
+} // namespace cementsph::scene

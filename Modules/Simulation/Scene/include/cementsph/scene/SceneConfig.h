@@ -1,0 +1,88 @@
+// An injection scene: where the cannula is, what is injected, and how the CT becomes a porous solid.
+// Read from JSON in which every key names its unit (Basafa et al. 2013, "Simulations" under "Foam Block
+// Tests"). Keys (all optional except tip_mm):
+//   scene_preset "paper"            baseline values below (the only scene preset)
+//   preset "default"|"paper"        the model preset (cementsph::sph::modelPreset)
+//   particle_radius_mm              r; spacing d = 2r, volume d^3 (VALIDATION.md)          paper 0.57
+//   tip_mm [x,y,z]                  cannula tip in the CT's physical frame                  required
+//   direction [x,y,z]               flow direction (normalised; not zero)                   [0,0,1]
+//   cannula_inner_diameter_mm       11G regular wall                                        paper 2.388
+//   cannula_length_mm               wall length behind the tip                              paper 90
+//   cannula_wall (bool)             fixed-particle cannula wall                             true
+//   flow_rate_ml_per_s                                                                      paper 0.05
+//   volume_ml                                                                               paper 5
+//   viscosity_pa_s                  constant, or the initial value of a linear rise         paper 100
+//   viscosity_rate_pa_per_s         linear rise mu(t) = viscosity_pa_s + rate t (rate > 0)
+//   viscosity_table [[t_s,mu_pa_s]] piecewise linear (not together with the two above)
+//   threshold_hu                    solid where HU > threshold                              paper 0
+//   roi_size_mm                     edge of the cube about the tip that is modelled         paper 40
+//   snapshot_interval_s                                                                     1
+//   solid_mass_factor               fixed particle mass = factor rho0 V_voxel (> 0)          8
+//                                   (ours, not the paper's: at factor 1 the compressed cloud, ~1.4 kPa against
+//                                   rho0 cs^2 = 1.18 kPa, entered the solid; docs/scene-figures.md)
+//   drag_coefficient, sound_speed_m_per_s, integrator   override the model preset
+// Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
+// line naming the key.
+#pragma once
+
+#include "cementsph/sph/ViscositySchedule.h"
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace cementsph::scene {
+
+struct SceneConfig {
+  std::string scenePreset = "paper";
+  std::string modelPreset = "default";
+  double particleRadiusMm = 0.57;
+  std::optional<Eigen::Vector3d> tipMm;
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+  double cannulaInnerDiameterMm = 2.388;
+  double cannulaLengthMm = 90.0;
+  bool cannulaWall = true;
+  double flowRateMlPerS = 0.05;
+  double volumeMl = 5.0;
+  double viscosityPaS = 100.0;
+  std::optional<double> viscosityRatePaPerS;
+  std::vector<std::pair<double, double>> viscosityTable; // (t [s], mu [Pa.s]); empty: constant or linear
+  double thresholdHu = 0.0;
+  double roiSizeMm = 40.0;
+  double snapshotIntervalS = 1.0;
+  double solidMassFactor = 8.0;
+  std::optional<double> dragCoefficient;
+  std::optional<double> soundSpeedMPerS;
+  std::optional<std::string> integrator;
+
+  double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
+  double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
+  double volumeM3() const { return volumeMl * 1e-6; }
+  double injectionDurationS() const { return volumeMl / flowRateMlPerS; }
+  sph::ViscositySchedule viscositySchedule() const;
+  // Throws std::invalid_argument naming the first key out of range (including a missing tip).
+  void validate() const;
+};
+
+// The paper's scene: r 0.57 mm, 11G (ID 2.388 mm, 9 cm), 0.05 ml/s, 5 ml, 100 Pa.s, HU > 0, 40 mm cube.
+SceneConfig scenePreset(const std::string& name);
+
+// Applies the keys of `j` (an object) over `base`; unknown keys, null values and wrong types throw. Does
+// not validate (call validate() once all overrides are in).
+void applySceneJson(SceneConfig& base, const nlohmann::json& j);
+// "key=value" with value in JSON (e.g. "volume_ml=0.2", "tip_mm=[1,2,3]", "integrator=\"overdamped\"";
+// a bare word that is not JSON is taken as a string).
+void applySceneOverride(SceneConfig& base, const std::string& assignment);
+
+// Reads a scene file: its scene_preset (default "paper") first, then its keys. Validated.
+SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string>& overrides = {});
+// The same from JSON text (validated).
+SceneConfig sceneFromJson(const nlohmann::json& j, const std::vector<std::string>& overrides = {});
+
+nlohmann::json toJson(const SceneConfig& scene);
+
+} // namespace cementsph::scene

@@ -1,0 +1,210 @@
+#include "cementsph/scene/SceneConfig.h"
+
+#include "cementsph/sph/ModelParameters.h"
+#include "cementsph/sph/Presets.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace cementsph::scene {
+
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) {
+  throw std::invalid_argument("scene: key '" + key + "' " + what);
+}
+
+double number(const json& v, const std::string& key) {
+  if (!v.is_number()) fail(key, "must be a number");
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) fail(key, "must be finite");
+  return x;
+}
+
+Eigen::Vector3d vector3(const json& v, const std::string& key) {
+  if (!v.is_array() || v.size() != 3) fail(key, "must be an array of 3 numbers [x, y, z]");
+  return {number(v[0], key), number(v[1], key), number(v[2], key)};
+}
+
+std::string text(const json& v, const std::string& key) {
+  if (!v.is_string()) fail(key, "must be a string");
+  return v.get<std::string>();
+}
+
+void requirePositive(double x, const std::string& key) {
+  if (!(x > 0)) {
+    std::ostringstream s;
+    s << "must be > 0 (got " << x << ")";
+    fail(key, s.str());
+  }
+}
+
+} // namespace
+
+SceneConfig scenePreset(const std::string& name) {
+  if (name != "paper") throw std::invalid_argument("scene: key 'scene_preset' must be \"paper\" (got \"" + name + "\")");
+  return SceneConfig{}; // the struct's defaults are the paper's values
+}
+
+void applySceneJson(SceneConfig& s, const json& j) {
+  if (!j.is_object()) throw std::invalid_argument("scene: the scene must be a JSON object");
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
+    const json& v = it.value();
+    if (v.is_null()) fail(key, "has no value");
+    if (key == "scene_preset") {
+      const SceneConfig p = scenePreset(text(v, key));
+      (void)p; // the preset is applied by the loaders before the other keys
+    } else if (key == "preset") {
+      s.modelPreset = text(v, key);
+      try {
+        (void)sph::modelPreset(s.modelPreset);
+      } catch (const std::invalid_argument&) {
+        fail(key, "must be \"default\" or \"paper\" (got \"" + s.modelPreset + "\")");
+      }
+    } else if (key == "particle_radius_mm") s.particleRadiusMm = number(v, key);
+    else if (key == "tip_mm") s.tipMm = vector3(v, key);
+    else if (key == "direction") s.direction = vector3(v, key);
+    else if (key == "cannula_inner_diameter_mm") s.cannulaInnerDiameterMm = number(v, key);
+    else if (key == "cannula_length_mm") s.cannulaLengthMm = number(v, key);
+    else if (key == "cannula_wall") {
+      if (!v.is_boolean()) fail(key, "must be true or false");
+      s.cannulaWall = v.get<bool>();
+    } else if (key == "flow_rate_ml_per_s") s.flowRateMlPerS = number(v, key);
+    else if (key == "volume_ml") s.volumeMl = number(v, key);
+    else if (key == "viscosity_pa_s") {
+      s.viscosityPaS = number(v, key);
+      s.viscosityTable.clear();
+    } else if (key == "viscosity_rate_pa_per_s") {
+      s.viscosityRatePaPerS = number(v, key);
+      s.viscosityTable.clear();
+    } else if (key == "viscosity_table") {
+      if (!v.is_array() || v.empty()) fail(key, "must be a non-empty array of [t_s, mu_pa_s] pairs");
+      std::vector<std::pair<double, double>> table;
+      for (const json& row : v) {
+        if (!row.is_array() || row.size() != 2) fail(key, "must be a non-empty array of [t_s, mu_pa_s] pairs");
+        table.emplace_back(number(row[0], key), number(row[1], key));
+      }
+      s.viscosityTable = std::move(table);
+      s.viscosityRatePaPerS.reset();
+    } else if (key == "threshold_hu") s.thresholdHu = number(v, key);
+    else if (key == "roi_size_mm") s.roiSizeMm = number(v, key);
+    else if (key == "snapshot_interval_s") s.snapshotIntervalS = number(v, key);
+    else if (key == "solid_mass_factor") s.solidMassFactor = number(v, key);
+    else if (key == "drag_coefficient") s.dragCoefficient = number(v, key);
+    else if (key == "sound_speed_m_per_s") s.soundSpeedMPerS = number(v, key);
+    else if (key == "integrator") {
+      s.integrator = text(v, key);
+      try {
+        (void)sph::parseIntegrator(*s.integrator);
+      } catch (const std::exception& e) {
+        fail(key, std::string("is not an integrator: ") + e.what());
+      }
+    } else
+      throw std::invalid_argument("scene: unknown key '" + key + "'");
+  }
+}
+
+void applySceneOverride(SceneConfig& s, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw std::invalid_argument("scene: override '" + assignment + "' must be key=value");
+  const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+  if (value.empty()) fail(key, "has no value");
+  json v = json::parse(value, nullptr, /*allow_exceptions=*/false);
+  if (v.is_discarded()) v = value; // a bare word: a string
+  applySceneJson(s, json{{key, v}});
+}
+
+sph::ViscositySchedule SceneConfig::viscositySchedule() const {
+  if (!viscosityTable.empty()) return sph::ViscositySchedule::table(viscosityTable);
+  if (viscosityRatePaPerS) return sph::ViscositySchedule::linear(viscosityPaS, *viscosityRatePaPerS);
+  return sph::ViscositySchedule::constant(viscosityPaS);
+}
+
+void SceneConfig::validate() const {
+  if (!tipMm) throw std::invalid_argument("scene: key 'tip_mm' is missing (the cannula tip [x, y, z] in mm)");
+  requirePositive(particleRadiusMm, "particle_radius_mm");
+  if (direction.norm() == 0) fail("direction", "must not be zero");
+  requirePositive(cannulaInnerDiameterMm, "cannula_inner_diameter_mm");
+  if (cannulaInnerDiameterMm < spacingM() * 1e3)
+    fail("cannula_inner_diameter_mm", "must be at least one particle diameter (2 particle_radius_mm)");
+  requirePositive(cannulaLengthMm, "cannula_length_mm");
+  requirePositive(flowRateMlPerS, "flow_rate_ml_per_s");
+  requirePositive(volumeMl, "volume_ml");
+  requirePositive(viscosityPaS, "viscosity_pa_s");
+  if (viscosityRatePaPerS) requirePositive(*viscosityRatePaPerS, "viscosity_rate_pa_per_s");
+  if (!viscosityTable.empty()) {
+    for (std::size_t k = 0; k < viscosityTable.size(); ++k) {
+      if (!(viscosityTable[k].second > 0)) fail("viscosity_table", "viscosities must be > 0");
+      if (k > 0 && !(viscosityTable[k].first > viscosityTable[k - 1].first))
+        fail("viscosity_table", "times must increase strictly");
+    }
+  }
+  requirePositive(roiSizeMm, "roi_size_mm");
+  if (roiSizeMm < 4 * spacingM() * 1e3) fail("roi_size_mm", "must be at least 4 particle diameters");
+  requirePositive(snapshotIntervalS, "snapshot_interval_s");
+  requirePositive(solidMassFactor, "solid_mass_factor");
+  if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
+  if (soundSpeedMPerS) requirePositive(*soundSpeedMPerS, "sound_speed_m_per_s");
+}
+
+SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrides) {
+  if (!j.is_object()) throw std::invalid_argument("scene: the scene must be a JSON object");
+  SceneConfig s = scenePreset("paper");
+  if (j.contains("scene_preset")) {
+    if (j["scene_preset"].is_null()) fail("scene_preset", "has no value");
+    s = scenePreset(text(j["scene_preset"], "scene_preset"));
+  }
+  applySceneJson(s, j);
+  for (const std::string& o : overrides) applySceneOverride(s, o);
+  s.validate();
+  return s;
+}
+
+SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path + ": cannot open the scene file");
+  json j = json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) throw std::invalid_argument(path + ": not valid JSON");
+  try {
+    return sceneFromJson(j, overrides);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+}
+
+json toJson(const SceneConfig& s) {
+  json j;
+  j["scene_preset"] = s.scenePreset;
+  j["preset"] = s.modelPreset;
+  j["particle_radius_mm"] = s.particleRadiusMm;
+  if (s.tipMm) j["tip_mm"] = {s.tipMm->x(), s.tipMm->y(), s.tipMm->z()};
+  j["direction"] = {s.direction.x(), s.direction.y(), s.direction.z()};
+  j["cannula_inner_diameter_mm"] = s.cannulaInnerDiameterMm;
+  j["cannula_length_mm"] = s.cannulaLengthMm;
+  j["cannula_wall"] = s.cannulaWall;
+  j["flow_rate_ml_per_s"] = s.flowRateMlPerS;
+  j["volume_ml"] = s.volumeMl;
+  if (s.viscosityTable.empty()) {
+    j["viscosity_pa_s"] = s.viscosityPaS;
+    if (s.viscosityRatePaPerS) j["viscosity_rate_pa_per_s"] = *s.viscosityRatePaPerS;
+  } else {
+    j["viscosity_table"] = json::array();
+    for (const auto& [t, mu] : s.viscosityTable) j["viscosity_table"].push_back({t, mu});
+  }
+  j["threshold_hu"] = s.thresholdHu;
+  j["roi_size_mm"] = s.roiSizeMm;
+  j["snapshot_interval_s"] = s.snapshotIntervalS;
+  j["solid_mass_factor"] = s.solidMassFactor;
+  if (s.dragCoefficient) j["drag_coefficient"] = *s.dragCoefficient;
+  if (s.soundSpeedMPerS) j["sound_speed_m_per_s"] = *s.soundSpeedMPerS;
+  if (s.integrator) j["integrator"] = *s.integrator;
+  return j;
+}
+
+} // namespace cementsph::scene

@@ -1,0 +1,93 @@
+// `cementsph inject` as a user meets it: a real run on a scaffold CT written as NRRD (files, metrics, the
+// command-line override), and bad input (one line on stderr, exit 1, no output folder).
+#include "ScaffoldCT.h"
+
+#include "cementsph/imaging/VolumeIO.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+struct Result {
+  int status;
+  std::string output;
+};
+Result run(const std::string& args) {
+  const std::string command = "OMP_NUM_THREADS=1 " + std::string(CEMENTSPH_EXECUTABLE) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
+  const int raw = pclose(pipe);
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, out};
+}
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / name;
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+fs::path writeCase(const fs::path& dir, const std::string& sceneJson) {
+  cementsph::imaging::writeVolume(cementsph::scene::testing::scaffold(), (dir / "ct.nrrd").string());
+  std::ofstream(dir / "scene.json") << sceneJson;
+  return dir;
+}
+} // namespace
+
+TEST(InjectCommand, RunsAndWritesTheResults) {
+  const fs::path dir = writeCase(scratch("inject-cli"), R"({"tip_mm": [13, 13, 13], "volume_ml": 5, "cannula_length_mm": 5})");
+  const Result r = run("inject --ct " + (dir / "ct.nrrd").string() + " --scene " + (dir / "scene.json").string() +
+                       " --out " + (dir / "out").string() + " --volume-ml 0.1 --snapshot-interval-s 0.5");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("injected"), std::string::npos) << r.output;
+  for (const char* f : {"metrics.json", "tip_pressure.csv", "particles.pvd", "simulated_ct.nrrd", "scene.json",
+                        "particles_0000.vtp"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  std::ifstream in(dir / "out" / "metrics.json");
+  const nlohmann::json m = nlohmann::json::parse(in);
+  const double d3 = std::pow(1.14e-3, 3) * 1e6;
+  EXPECT_GT(m["volume_injected_ml"].get<double>(), 0.1 - d3); // the override won over the file's 5 ml
+  EXPECT_LE(m["volume_injected_ml"].get<double>(), 0.1);
+  EXPECT_EQ(m["snapshots"].get<int>(), 4); // 0.5, 1, 1.5 s and the end (2 s)
+  for (const auto& [key, value] : m.items()) {
+    if (value.is_number()) {
+      EXPECT_TRUE(std::isfinite(value.get<double>())) << key;
+    }
+  }
+  // No temporary files left behind.
+  for (const auto& e : fs::directory_iterator(dir / "out"))
+    EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+}
+
+TEST(InjectCommand, BadSceneIsOneLineAndNoOutput) {
+  const fs::path dir = writeCase(scratch("inject-bad"), R"({"tip_mm": [13, 13, 13], "volume_ml": 0.1, "flow_rate": 1})");
+  const Result r = run("inject --ct " + (dir / "ct.nrrd").string() + " --scene " + (dir / "scene.json").string() +
+                       " --out " + (dir / "out").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("unknown key 'flow_rate'"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(InjectCommand, TipInSolidIsOneLineAndNoOutput) {
+  const fs::path dir = writeCase(scratch("inject-solid"), R"({"tip_mm": [0.5, 0.5, 13], "volume_ml": 0.1})");
+  const Result r = run("inject --ct " + (dir / "ct.nrrd").string() + " --scene " + (dir / "scene.json").string() +
+                       " --out " + (dir / "out").string() + " --set viscosity_pa_s=-3");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("'viscosity_pa_s' must be > 0"), std::string::npos) << r.output;
+  const Result s = run("inject --ct " + (dir / "ct.nrrd").string() + " --scene " + (dir / "scene.json").string() +
+                       " --out " + (dir / "out").string());
+  EXPECT_EQ(s.status, 1);
+  EXPECT_NE(s.output.find("lies in solid"), std::string::npos) << s.output;
+  EXPECT_EQ(std::count(s.output.begin(), s.output.end(), '\n'), 1) << s.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}

@@ -1,0 +1,140 @@
+// CT to porous solid on small synthetic volumes with exact expected counts (oracle: counting lattice points
+// by hand, see docs/scene-figures.md), and the three input errors.
+#include "cementsph/scene/PorousSolid.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+
+using namespace cementsph;
+using namespace cementsph::scene;
+using imaging::ImageType;
+
+namespace {
+// n^3 voxels of 1 mm at the origin; HU from f(i, j, k).
+ImageType::Pointer volume(int n, const std::function<float(int, int, int)>& f, double spacingMm = 1.0) {
+  auto img = ImageType::New();
+  ImageType::RegionType region;
+  ImageType::SizeType size;
+  size.Fill(static_cast<itk::SizeValueType>(n));
+  region.SetSize(size);
+  img->SetRegions(region);
+  img->SetSpacing(spacingMm);
+  img->Allocate();
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) img->SetPixel({{i, j, k}}, f(i, j, k));
+  return img;
+}
+// A solid slab z = 5..14 (1000 HU) in 20^3 voxels of 1 mm, air (-1000 HU) elsewhere; optionally a hole
+// column through it at i = j = 10.
+ImageType::Pointer slab(bool hole) {
+  return volume(20, [hole](int i, int j, int k) {
+    if (hole && i == 10 && j == 10) return -1000.f;
+    return (k >= 5 && k <= 14) ? 1000.f : -1000.f;
+  });
+}
+PorousSolidOptions options(double roiMm = 40.0) {
+  PorousSolidOptions o;
+  o.thresholdHu = 0;
+  o.roiSizeMm = roiMm;
+  o.reachMm = 2.5;
+  o.restDensity = 1180;
+  return o;
+}
+std::string errorOf(const ImageType* ct, const Eigen::Vector3d& tip, const PorousSolidOptions& o) {
+  try {
+    buildPorousSolid(ct, tip, o);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+} // namespace
+
+TEST(PorousSolid, SlabKeepsOnlyTheLayersWithinReachOfPores) {
+  const PorousSolid s = buildPorousSolid(slab(false), {10, 10, 2}, options());
+  EXPECT_EQ(s.solidVoxels, 4000u); // 10 layers of 20 x 20
+  // Reach 2.5 voxels: layers 5, 6 (pore at z = 4) and 13, 14 (pore at z = 15); layer 7 is 3 from the pores.
+  EXPECT_EQ(s.keptVoxels, 1600u);
+  EXPECT_EQ(s.positions.size(), 1600u);
+  EXPECT_EQ(s.grid.size, (std::array<int, 3>{20, 20, 20}));
+  EXPECT_EQ(s.connectedPoreVoxels, 5u * 400u); // below the slab only
+  EXPECT_DOUBLE_EQ(s.particleMass, 1180 * 1e-9);
+  EXPECT_NEAR(s.positions.front().z(), 5e-3, 1e-15); // voxel centres, metres
+  EXPECT_NEAR(s.lowerM.x(), -0.5e-3, 1e-15);
+  EXPECT_NEAR(s.upperM.z(), 19.5e-3, 1e-15);
+}
+
+TEST(PorousSolid, HoleThroughTheSlabKeepsTheVoxelsAroundIt) {
+  const PorousSolid s = buildPorousSolid(slab(true), {10, 10, 2}, options());
+  EXPECT_EQ(s.solidVoxels, 3990u);
+  // 1600 - 4 hole voxels in the outer layers, + 6 inner layers x 20 voxels with 0 < a^2 + b^2 <= 6.25.
+  EXPECT_EQ(s.keptVoxels, 1716u);
+  EXPECT_EQ(s.connectedPoreVoxels, 8000u - 3990u); // the hole joins both sides
+}
+
+TEST(PorousSolid, RegionOfInterestIsACubeAboutTheTipClippedToTheCT) {
+  // Tip (2, 2, 2), 10 mm: centres in [-3, 7] -> indices 0..7 (clipped at 0).
+  const PorousSolid s = buildPorousSolid(slab(false), {2, 2, 2}, options(10));
+  EXPECT_EQ(s.roiStart, (std::array<long, 3>{0, 0, 0}));
+  EXPECT_EQ(s.roiSize, (std::array<long, 3>{8, 8, 8}));
+  EXPECT_EQ(s.solidVoxels, 3u * 64u); // layers 5..7
+  EXPECT_EQ(s.keptVoxels, 2u * 64u);  // layers 5, 6
+  // Tip (15.2, 10, 2): x centres in [10.2, 20.2] -> 11..19; y 5..15; z 0..7.
+  const PorousSolid t = buildPorousSolid(slab(false), {15.2, 10, 2}, options(10));
+  EXPECT_EQ(t.roiStart, (std::array<long, 3>{11, 5, 0}));
+  EXPECT_EQ(t.roiSize, (std::array<long, 3>{9, 11, 8}));
+  EXPECT_NEAR(t.grid.origin.x(), 11e-3, 1e-15);
+  EXPECT_EQ(t.solidVoxels, 3u * 99u);
+}
+
+TEST(PorousSolid, AnisotropicSpacingAndMass) {
+  // 0.5 mm voxels: the slab layers 5..14 are at 2.5..7 mm; reach 2.5 mm = 5 voxels -> layers 5..9, 10..14 all
+  // within reach of the pores at layers 4 and 15: everything is kept.
+  const PorousSolid s = buildPorousSolid(volume(20, [](int, int, int k) { return (k >= 5 && k <= 14) ? 1000.f : -1000.f; }, 0.5),
+                                         {5, 5, 1}, options());
+  EXPECT_EQ(s.solidVoxels, 4000u);
+  EXPECT_EQ(s.keptVoxels, 4000u);
+  EXPECT_DOUBLE_EQ(s.particleMass, 1180 * 0.125e-9);
+}
+
+TEST(PorousSolid, TipOutsideTheCT) {
+  const std::string e = errorOf(slab(false), {25, 10, 2}, options());
+  EXPECT_NE(e.find("lies outside the CT"), std::string::npos) << e;
+  EXPECT_NE(e.find("(25, 10, 2) mm"), std::string::npos) << e;
+}
+
+TEST(PorousSolid, TipInsideSolid) {
+  const std::string e = errorOf(slab(false), {10, 10, 10}, options());
+  EXPECT_NE(e.find("lies in solid"), std::string::npos) << e;
+  EXPECT_NE(e.find("1000 HU"), std::string::npos) << e;
+}
+
+TEST(PorousSolid, NoPoreSpaceNearTheTip) {
+  // A closed 2 x 2 x 2 cavity (8 mm^3) in solid: enough for 0.005 ml, not for 0.1 ml.
+  auto ct = volume(12, [](int i, int j, int k) { return (i >= 5 && i <= 6 && j >= 5 && j <= 6 && k >= 5 && k <= 6) ? -1000.f : 1000.f; });
+  PorousSolidOptions o = options();
+  o.requiredPoreVolumeMm3 = 5;
+  const PorousSolid s = buildPorousSolid(ct, {5, 5, 5}, o);
+  EXPECT_EQ(s.connectedPoreVoxels, 8u);
+  // Solid within 2.5 voxels of the cavity: count by brute force over the 12^3 grid.
+  std::size_t expected = 0;
+  for (int k = 0; k < 12; ++k)
+    for (int j = 0; j < 12; ++j)
+      for (int i = 0; i < 12; ++i) {
+        const bool pore = i >= 5 && i <= 6 && j >= 5 && j <= 6 && k >= 5 && k <= 6;
+        if (pore) continue;
+        bool near = false;
+        for (int c = 5; c <= 6; ++c)
+          for (int b = 5; b <= 6; ++b)
+            for (int a = 5; a <= 6; ++a)
+              near |= (i - a) * (i - a) + (j - b) * (j - b) + (k - c) * (k - c) <= 6;
+        expected += near;
+      }
+  EXPECT_EQ(s.keptVoxels, expected);
+  o.requiredPoreVolumeMm3 = 100;
+  const std::string e = errorOf(ct, {5, 5, 5}, o);
+  EXPECT_NE(e.find("no pore space near the tip"), std::string::npos) << e;
+  EXPECT_NE(e.find("0.008 ml"), std::string::npos) << e;
+}

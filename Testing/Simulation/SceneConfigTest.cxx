@@ -1,0 +1,154 @@
+// Scene files: the paper preset's values, keys with units, overrides, and one clear error per bad input.
+#include "cementsph/scene/SceneConfig.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace cementsph::scene;
+using nlohmann::json;
+
+namespace {
+// The message of the std::invalid_argument thrown by sceneFromJson(j, overrides), or "" if none.
+std::string errorOf(const json& j, const std::vector<std::string>& overrides = {}) {
+  try {
+    sceneFromJson(j, overrides);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+json minimal() { return json{{"tip_mm", {1.0, 2.0, 3.0}}}; }
+void expectError(const json& j, const std::string& key, const std::vector<std::string>& overrides = {}) {
+  const std::string e = errorOf(j, overrides);
+  EXPECT_NE(e.find("'" + key + "'"), std::string::npos) << "expected an error naming " << key << ", got: " << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+}
+} // namespace
+
+TEST(SceneConfig, PaperPresetHoldsThePapersValues) {
+  const SceneConfig s = sceneFromJson(minimal());
+  EXPECT_EQ(s.scenePreset, "paper");
+  EXPECT_EQ(s.modelPreset, "default");
+  EXPECT_DOUBLE_EQ(s.particleRadiusMm, 0.57);
+  EXPECT_DOUBLE_EQ(s.spacingM(), 1.14e-3);
+  EXPECT_DOUBLE_EQ(s.cannulaInnerDiameterMm, 2.388);
+  EXPECT_DOUBLE_EQ(s.cannulaLengthMm, 90.0);
+  EXPECT_TRUE(s.cannulaWall);
+  EXPECT_DOUBLE_EQ(s.flowRateMlPerS, 0.05);
+  EXPECT_DOUBLE_EQ(s.volumeMl, 5.0);
+  EXPECT_DOUBLE_EQ(s.injectionDurationS(), 100.0);
+  EXPECT_DOUBLE_EQ(s.viscositySchedule().at(50.0), 100.0);
+  EXPECT_DOUBLE_EQ(s.thresholdHu, 0.0);
+  EXPECT_DOUBLE_EQ(s.roiSizeMm, 40.0);
+  EXPECT_DOUBLE_EQ(s.snapshotIntervalS, 1.0);
+  EXPECT_DOUBLE_EQ(s.solidMassFactor, 8.0);
+  EXPECT_EQ(*s.tipMm, Eigen::Vector3d(1, 2, 3));
+}
+
+TEST(SceneConfig, EveryKeyIsReadAndOverridesWin) {
+  const json j = {{"scene_preset", "paper"}, {"preset", "paper"}, {"particle_radius_mm", 0.5},
+                  {"tip_mm", {1, 2, 3}}, {"direction", {1, 0, 0}}, {"cannula_inner_diameter_mm", 3.0},
+                  {"cannula_length_mm", 20}, {"cannula_wall", false}, {"flow_rate_ml_per_s", 0.1},
+                  {"volume_ml", 2}, {"viscosity_pa_s", 50}, {"viscosity_rate_pa_per_s", 25},
+                  {"threshold_hu", 200}, {"roi_size_mm", 30}, {"snapshot_interval_s", 0.5},
+                  {"drag_coefficient", 4.0}, {"sound_speed_m_per_s", 2.0}, {"solid_mass_factor", 3.0}, {"integrator", "overdamped"}};
+  const SceneConfig s = sceneFromJson(j, {"volume_ml=0.2", "cannula_wall=true", "integrator=explicit"});
+  EXPECT_EQ(s.modelPreset, "paper");
+  EXPECT_DOUBLE_EQ(s.particleRadiusMm, 0.5);
+  EXPECT_EQ(s.direction, Eigen::Vector3d(1, 0, 0));
+  EXPECT_DOUBLE_EQ(s.cannulaInnerDiameterMm, 3.0);
+  EXPECT_DOUBLE_EQ(s.cannulaLengthMm, 20.0);
+  EXPECT_TRUE(s.cannulaWall);              // overridden
+  EXPECT_DOUBLE_EQ(s.volumeMl, 0.2);       // overridden
+  EXPECT_EQ(*s.integrator, "explicit");    // overridden, bare word
+  EXPECT_DOUBLE_EQ(s.flowRateMlPerS, 0.1);
+  EXPECT_DOUBLE_EQ(s.viscositySchedule().at(2.0), 100.0); // 50 + 25 * 2
+  EXPECT_DOUBLE_EQ(s.thresholdHu, 200.0);
+  EXPECT_DOUBLE_EQ(s.roiSizeMm, 30.0);
+  EXPECT_DOUBLE_EQ(s.snapshotIntervalS, 0.5);
+  EXPECT_DOUBLE_EQ(*s.dragCoefficient, 4.0);
+  EXPECT_DOUBLE_EQ(s.solidMassFactor, 3.0);
+  EXPECT_DOUBLE_EQ(*s.soundSpeedMPerS, 2.0);
+  // Round trip through toJson.
+  const SceneConfig r = sceneFromJson(toJson(s));
+  EXPECT_EQ(toJson(r), toJson(s));
+}
+
+TEST(SceneConfig, ViscosityTable) {
+  json j = minimal();
+  j["viscosity_table"] = {{0, 50}, {10, 150}};
+  const SceneConfig s = sceneFromJson(j);
+  EXPECT_DOUBLE_EQ(s.viscositySchedule().at(5.0), 100.0);
+  EXPECT_DOUBLE_EQ(s.viscositySchedule().at(20.0), 150.0);
+}
+
+TEST(SceneConfig, UnknownKeyIsNamed) {
+  json j = minimal();
+  j["volume_mL"] = 1;
+  EXPECT_EQ(errorOf(j), "scene: unknown key 'volume_mL'");
+  expectError(minimal(), "flow_rate", {"flow_rate=1"});
+}
+
+TEST(SceneConfig, MissingValuesAreNamed) {
+  EXPECT_EQ(errorOf(json::object()), "scene: key 'tip_mm' is missing (the cannula tip [x, y, z] in mm)");
+  json j = minimal();
+  j["volume_ml"] = nullptr;
+  expectError(j, "volume_ml");
+  expectError(minimal(), "volume_ml", {"volume_ml="});
+  expectError(minimal(), "volume_ml", {"volume_ml=\"lots\""}); // wrong type
+  json t = minimal();
+  t["tip_mm"] = {1, 2};
+  expectError(t, "tip_mm");
+}
+
+TEST(SceneConfig, OutOfRangeValuesAreNamed) {
+  for (const char* key : {"particle_radius_mm", "viscosity_pa_s", "viscosity_rate_pa_per_s", "flow_rate_ml_per_s",
+                          "volume_ml", "cannula_inner_diameter_mm", "cannula_length_mm", "roi_size_mm",
+                          "snapshot_interval_s", "solid_mass_factor", "drag_coefficient", "sound_speed_m_per_s"}) {
+    for (double bad : {0.0, -1.0}) {
+      json j = minimal();
+      j[key] = bad;
+      expectError(j, key);
+    }
+  }
+  json d = minimal();
+  d["direction"] = {0, 0, 0};
+  expectError(d, "direction");
+  json v = minimal();
+  v["viscosity_table"] = {{0, 50}, {0, 60}};
+  expectError(v, "viscosity_table");
+  v["viscosity_table"] = {{0, 50}, {1, -60}};
+  expectError(v, "viscosity_table");
+  json p = minimal();
+  p["preset"] = "fast";
+  expectError(p, "preset");
+  p = minimal();
+  p["integrator"] = "leapfrog";
+  expectError(p, "integrator");
+  p = minimal();
+  p["scene_preset"] = "vertebra";
+  expectError(p, "scene_preset");
+}
+
+TEST(SceneConfig, FileErrorsNameThePath) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-scene-test";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "scene.json").string();
+  {
+    std::ofstream(path) << R"({"tip_mm": [0, 0, 0], "volume_ml": -2})";
+  }
+  try {
+    loadSceneFile(path);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": scene: key 'volume_ml' must be > 0 (got -2)");
+  }
+  EXPECT_DOUBLE_EQ(loadSceneFile(path, {"volume_ml=0.3"}).volumeMl, 0.3);
+  {
+    std::ofstream(path) << "{ not json";
+  }
+  EXPECT_THROW(loadSceneFile(path), std::invalid_argument);
+  EXPECT_THROW(loadSceneFile((dir / "missing.json").string()), std::invalid_argument);
+}
