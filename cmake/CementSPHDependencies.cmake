@@ -19,7 +19,7 @@ find_package(VTK 9.1 REQUIRED COMPONENTS
 # ITK 5.2 (Debian): no ITKVtkGlue, so the imaging module carries its own geometry-preserving bridge.
 find_package(ITK 5.2 REQUIRED COMPONENTS
   ITKCommon ITKIOImageBase ITKIONRRD ITKIOMeta ITKIONIFTI ITKIOGDCM ITKIOTransformBase
-  ITKIOTransformInsightLegacy ITKRegistrationMethodsv4 ITKOptimizersv4 ITKMetricsv4
+  ITKIOTransformInsightLegacy ITKIOTransformMatlab ITKIOTransformHDF5 ITKRegistrationMethodsv4 ITKOptimizersv4 ITKMetricsv4
   ITKTransform ITKImageGrid ITKImageFilterBase ITKThresholding ITKConnectedComponents
   ITKMathematicalMorphology ITKBinaryMathematicalMorphology ITKSmoothing ITKImageIntensity
   ITKImageStatistics ITKLabelMap ITKDistanceMap ITKTestKernel)

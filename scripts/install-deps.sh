@@ -10,6 +10,8 @@ PACKAGES=(
   libeigen3-dev
   # imaging and visualisation
   libvtk9-dev libinsighttoolkit5-dev libgdcm-tools libtbb-dev
+  # registration reference for the imaging benchmark (issue 3)
+  elastix
   # tests, benchmarks, command line, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # off-screen rendering on headless machines (virtual X server + Mesa software GL)

@@ -1,0 +1,301 @@
+// `cementsph compare`: registers the post-injection CT onto the pre-injection CT, segments the cement
+// in it (and, when given, in a simulated CT on the pre grid), and compares them: the paper's surface
+// error (larger of the two directed mean distances), Hausdorff and its 95th percentile, Dice and
+// Jaccard, cement volume, mean spreading distance from the injection point, centroid offset.
+// A thin layer over CementSPH::ImagingIO, Registration, Segmentation and SurfaceMetrics.
+// Nothing is written until everything is computed, and every file is written atomically.
+#include "CommandRegistry.h"
+
+#include "cementsph/imaging/AffineRegistration.h"
+#include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/CementSegmentation.h"
+#include "cementsph/imaging/ItkVtkBridge.h"
+#include "cementsph/imaging/PolyDataIO.h"
+#include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/surfacemetrics/Isosurface.h"
+#include "cementsph/surfacemetrics/SurfaceDistance.h"
+#include "cementsph/surfacemetrics/VolumeMetrics.h"
+
+#include <itkIdentityTransform.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace cementsph::imaging;
+namespace sm = cementsph::surfacemetrics;
+using nlohmann::json;
+
+struct CompareArgs {
+  std::string pre, post, simulated, out;
+  std::vector<double> injection;
+  double thresholdHU = SegmentationOptions{}.differenceThresholdHU;
+  double closingMm = 0.0;
+  double searchRadiusMm = SegmentationOptions{}.injectionSearchRadiusMm;
+  double smoothingVoxels = sm::IsosurfaceOptions{}.smoothingSigmaVoxels;
+  bool noRegistration = false;
+  bool noCementMask = false;
+};
+
+// One segmented cement: mask, its VTK copy, its surface and volume metrics.
+struct Cement {
+  SegmentationResult segmentation;
+  vtkSmartPointer<vtkImageData> vtkMask;
+  vtkSmartPointer<vtkPolyData> surface;
+  double spreadingMm = 0.0;
+  sm::Point3 centroid{0, 0, 0};
+  bool found() const { return segmentation.voxels > 0; }
+};
+
+Cement analyse(const ImageType* volume, const ImageType* pre, const SegmentationOptions& options,
+               const sm::Point3& injection, double smoothingVoxels) {
+  Cement c;
+  c.segmentation = segmentCement(volume, pre, options);
+  c.vtkMask = toVtk(c.segmentation.mask.GetPointer());
+  if (c.found()) {
+    c.spreadingMm = sm::meanSpreadingDistanceMm(c.vtkMask, injection);
+    c.centroid = sm::centroidMm(c.vtkMask);
+    sm::IsosurfaceOptions iso;
+    iso.smoothingSigmaVoxels = smoothingVoxels;
+    c.surface = sm::isosurface(c.vtkMask, iso);
+  }
+  return c;
+}
+
+json cementJson(const Cement& c) {
+  json j;
+  j["cement_found"] = c.found();
+  j["cement_volume_ml"] = c.segmentation.volumeMl;
+  j["cement_voxels"] = c.segmentation.voxels;
+  j["mean_spreading_distance_mm"] = c.spreadingMm;
+  j["centroid_mm"] = c.found() ? json(c.centroid) : json(nullptr);
+  j["components_above_threshold"] = c.segmentation.componentsFound;
+  j["component_selection"] = c.segmentation.selection;
+  if (c.segmentation.selection == "nearest-to-injection-point")
+    j["component_distance_to_injection_point_mm"] = c.segmentation.distanceToInjectionPointMm;
+  j["surface_vertices"] = c.surface ? c.surface->GetNumberOfPoints() : 0;
+  return j;
+}
+
+json directedJson(const sm::DirectedDistance& d) {
+  return {{"vertices", d.vertices}, {"mean_mm", d.meanMm}, {"max_mm", d.maxMm},
+          {"std_mm", d.stdMm},      {"p95_mm", d.p95Mm}};
+}
+
+double seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
+  auto a = std::make_shared<CompareArgs>();
+  sub.add_option("--pre", a->pre, "Pre-injection CT (file: .nrrd .mha .nii .nii.gz, or DICOM directory)")
+      ->required();
+  sub.add_option("--post", a->post, "Post-injection CT (file or DICOM directory)")->required();
+  sub.add_option("--simulated", a->simulated,
+                 "Simulated post-injection CT on the pre CT's grid (e.g. from `cementsph voxelise`)");
+  sub.add_option("--injection-point-mm", a->injection,
+                 "Injection point (cannula tip) in the pre CT's physical space, mm: x,y,z")
+      ->required()
+      ->delimiter(',')
+      ->expected(3);
+  sub.add_option("--out", a->out, "Output directory (created; existing files are replaced)")->required();
+  sub.add_option("--threshold-hu", a->thresholdHU,
+                 "Cement = (registered post - pre) above this, HU")
+      ->capture_default_str();
+  sub.add_option("--closing-radius-mm", a->closingMm,
+                 "Morphological closing of the cement mask, ball radius in mm (0: none)")
+      ->capture_default_str();
+  sub.add_option("--injection-search-radius-mm", a->searchRadiusMm,
+                 "If no cement is at the injection point, keep the nearest within this distance, mm")
+      ->capture_default_str();
+  sub.add_option("--surface-smoothing-voxels", a->smoothingVoxels,
+                 "Gaussian sigma applied to masks before isosurfacing, voxels (0: staircase)")
+      ->capture_default_str();
+  sub.add_flag("--no-registration", a->noRegistration,
+               "POST is already aligned with PRE (it is only resampled onto PRE's grid)");
+  sub.add_flag("--no-cement-mask", a->noCementMask,
+               "Registration: do not exclude bright (cement) voxels of POST from the metric");
+
+  return [a]() {
+    const auto start = std::chrono::steady_clock::now();
+    json timing;
+    const sm::Point3 injection{a->injection[0], a->injection[1], a->injection[2]};
+    PointType injectionPoint;
+    for (unsigned i = 0; i < 3; ++i) injectionPoint[i] = injection[i];
+
+    // 1. Read.
+    auto t = std::chrono::steady_clock::now();
+    const auto pre = readVolume(a->pre);
+    const auto post = readVolume(a->post);
+    ImageType::Pointer simulated;
+    if (!a->simulated.empty()) simulated = readVolume(a->simulated);
+    {
+      ImageType::IndexType index;
+      if (!pre->TransformPhysicalPointToIndex(injectionPoint, index))
+        throw std::runtime_error("the injection point (" + std::to_string(injection[0]) + ", " +
+                                 std::to_string(injection[1]) + ", " + std::to_string(injection[2]) +
+                                 ") mm lies outside the pre-injection volume");
+    }
+    timing["read_s"] = seconds(t);
+
+    // 2. Register POST onto PRE and resample it onto PRE's grid.
+    t = std::chrono::steady_clock::now();
+    std::optional<RegistrationResult> registration;
+    ImageType::Pointer registered;
+    auto identity = itk::IdentityTransform<double, 3>::New();
+    if (a->noRegistration) {
+      if (overlapVolumeMm3(geometryOf(pre), geometryOf(post)) <= 0.0)
+        throw std::runtime_error("the pre and post volumes do not overlap in space");
+      registered = resampleOnto(post, pre, identity);
+    } else {
+      RegistrationOptions options;
+      options.maskCement = !a->noCementMask;
+      registration = registerAffine(pre, post, options);
+      registered = resampleOnto(post, pre, registration->transform);
+    }
+    timing["registration_s"] = seconds(t);
+    if (simulated && !geometryOf(simulated).sameGrid(geometryOf(pre))) {
+      if (overlapVolumeMm3(geometryOf(pre), geometryOf(simulated)) <= 0.0)
+        throw std::runtime_error("the simulated and pre volumes do not overlap in space");
+      simulated = resampleOnto(simulated, pre, identity);
+    }
+
+    // 3. Segment, 4. measure.
+    t = std::chrono::steady_clock::now();
+    SegmentationOptions seg;
+    seg.differenceThresholdHU = a->thresholdHU;
+    seg.injectionPointMm = injectionPoint;
+    seg.injectionSearchRadiusMm = a->searchRadiusMm;
+    seg.closingRadiusMm = a->closingMm;
+    const Cement ct = analyse(registered, pre, seg, injection, a->smoothingVoxels);
+    std::optional<Cement> sim;
+    if (simulated) sim = analyse(simulated, pre, seg, injection, a->smoothingVoxels);
+    timing["segmentation_s"] = seconds(t);
+
+    json metrics;
+    json warnings = json::array();
+    metrics["inputs"] = {{"pre", a->pre},
+                         {"post", a->post},
+                         {"simulated", a->simulated.empty() ? json(nullptr) : json(a->simulated)},
+                         {"injection_point_mm", a->injection}};
+    metrics["segmentation"] = {{"difference_threshold_hu", a->thresholdHU},
+                               {"closing_radius_mm", a->closingMm},
+                               {"injection_search_radius_mm", a->searchRadiusMm},
+                               {"surface_smoothing_sigma_voxels", a->smoothingVoxels}};
+    if (registration) {
+      json levels = json::array();
+      for (const auto& l : registration->levels)
+        levels.push_back({{"stage", l.stage}, {"level", l.level}, {"shrink_factor", l.shrink},
+                          {"iterations", l.iterations}, {"metric_mean_squares_hu2", l.metric},
+                          {"stop_condition", l.stopCondition}});
+      metrics["registration"] = {
+          {"method", "ITK v4: translation then affine, multi-resolution, mean squares, cement masked"},
+          {"final_metric_mean_squares_hu2", registration->finalMetric},
+          {"levels", levels},
+          {"cement_mask_threshold_hu", registration->cementThresholdHU},
+          {"cement_masked_moving_voxels", registration->maskedMovingVoxels},
+          {"transform_file", "post_to_pre_affine.tfm"}};
+    } else {
+      metrics["registration"] = nullptr;
+    }
+    metrics["cement_volume_ml"] = ct.segmentation.volumeMl;
+    metrics["mean_spreading_distance_mm"] = ct.spreadingMm;
+    metrics["ct"] = cementJson(ct);
+    if (!ct.found()) warnings.push_back("no cement found in the post-injection CT");
+
+    std::optional<sm::SurfaceComparison> surfaces;
+    if (sim) {
+      metrics["simulated"] = cementJson(*sim);
+      if (!sim->found()) warnings.push_back("no cement found in the simulated CT");
+      const sm::Overlap overlap = sm::overlap(ct.vtkMask, sim->vtkMask);
+      metrics["dice"] = overlap.dice;
+      metrics["jaccard"] = overlap.jaccard;
+      metrics["simulated_minus_ct_volume_ml"] = sim->segmentation.volumeMl - ct.segmentation.volumeMl;
+      if (ct.found() && sim->found()) {
+        t = std::chrono::steady_clock::now();
+        surfaces = sm::compareSurfaces(ct.surface, sim->surface);
+        timing["surface_metrics_s"] = seconds(t);
+        metrics["ct_to_simulated_distance"] = directedJson(surfaces->aToB);
+        metrics["simulated_to_ct_distance"] = directedJson(surfaces->bToA);
+        metrics["error_mm"] = surfaces->errorMm;
+        metrics["error_direction"] =
+            surfaces->errorDirection == "a_to_b" ? "ct_to_simulated" : "simulated_to_ct";
+        metrics["hausdorff_mm"] = surfaces->hausdorffMm;
+        metrics["hausdorff95_mm"] = surfaces->hausdorff95Mm;
+        sm::Point3 d;
+        for (int i = 0; i < 3; ++i) d[i] = sim->centroid[i] - ct.centroid[i];
+        metrics["centroid_offset_vector_mm"] = d;
+        metrics["centroid_offset_mm"] = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      } else {
+        for (const char* key : {"error_mm", "hausdorff_mm", "hausdorff95_mm", "centroid_offset_mm"})
+          metrics[key] = nullptr;
+      }
+    }
+    metrics["warnings"] = warnings;
+
+    // 5. Write: directory, then every file atomically.
+    t = std::chrono::steady_clock::now();
+    std::error_code ec;
+    fs::create_directories(a->out, ec);
+    if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
+    const fs::path out(a->out);
+    writeVolume(registered, (out / "registered_post.nrrd").string());
+    if (registration) writeTransform(registration->transform, (out / "post_to_pre_affine.tfm").string());
+    writeMask(ct.segmentation.mask, (out / "cement_ct_mask.nrrd").string());
+    if (ct.surface) writePolyData(ct.surface, (out / "cement_ct_surface.vtp").string());
+    if (sim) {
+      writeMask(sim->segmentation.mask, (out / "cement_simulated_mask.nrrd").string());
+      if (sim->surface) writePolyData(sim->surface, (out / "cement_simulated_surface.vtp").string());
+    }
+    timing["write_s"] = seconds(t);
+    timing["total_s"] = seconds(start);
+    metrics["timing_s"] = timing;
+    writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
+
+    // 6. Summary.
+    if (registration) std::cout << "registration (post -> pre):\n" << formatRegistrationReport(*registration);
+    char line[200];
+    auto row = [&](const char* name, const char* unit, double ctValue, std::optional<double> simValue) {
+      if (simValue)
+        std::snprintf(line, sizeof line, "  %-28s %-4s %12.3f %12.3f\n", name, unit, ctValue, *simValue);
+      else
+        std::snprintf(line, sizeof line, "  %-28s %-4s %12.3f\n", name, unit, ctValue);
+      std::cout << line;
+    };
+    std::cout << "cement:" << (sim ? "                                    CT    simulated\n" : "\n");
+    row("volume", "ml", ct.segmentation.volumeMl,
+        sim ? std::optional<double>(sim->segmentation.volumeMl) : std::nullopt);
+    row("mean spreading distance", "mm", ct.spreadingMm,
+        sim ? std::optional<double>(sim->spreadingMm) : std::nullopt);
+    if (surfaces) {
+      std::cout << "comparison:\n";
+      row("mean distance CT->sim", "mm", surfaces->aToB.meanMm, std::nullopt);
+      row("mean distance sim->CT", "mm", surfaces->bToA.meanMm, std::nullopt);
+      row("error (larger mean)", "mm", surfaces->errorMm, std::nullopt);
+      row("Hausdorff", "mm", surfaces->hausdorffMm, std::nullopt);
+      row("Hausdorff 95 %", "mm", surfaces->hausdorff95Mm, std::nullopt);
+      row("Dice", "", metrics["dice"].get<double>(), std::nullopt);
+      row("Jaccard", "", metrics["jaccard"].get<double>(), std::nullopt);
+      row("centroid offset", "mm", metrics["centroid_offset_mm"].get<double>(), std::nullopt);
+    }
+    for (const auto& w : warnings) std::cerr << "cementsph compare: warning: " << w.get<std::string>() << "\n";
+    std::cout << "wrote " << (out / "metrics.json").string() << " (" << timing["total_s"].get<double>()
+              << " s)\n";
+    return 0;
+  };
+}
+
+} // namespace
+
+CEMENTSPH_REGISTER_COMMAND(compare_command, "compare",
+                           "Register post- to pre-injection CT, segment the cement, compare with a "
+                           "simulated CT",
+                           setupCompare)

@@ -1,0 +1,113 @@
+// writeDicomSeries: one int16 CT slice per file with the geometry in Image Position / Orientation
+// Patient, following ITK's ResampleDICOM example (per-slice dictionaries, one study/series UID).
+#include "cementsph/imaging/VolumeIO.h"
+
+#include <itkGDCMImageIO.h>
+#include <itkImageRegionConstIterator.h>
+#include <itkImageRegionIterator.h>
+#include <itkImageSeriesWriter.h>
+#include <itkMetaDataObject.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace cementsph::imaging {
+
+namespace {
+// A DICOM UID under the UUID-derived root 2.25 (ISO/IEC 9834-8): "2.25." and up to 38 random
+// decimal digits, no leading zero; well under the 64-character limit.
+class UidGenerator {
+public:
+  std::string Generate() {
+    std::uniform_int_distribution<int> digit(0, 9), first(1, 9);
+    std::string uid = "2.25." + std::to_string(first(rng_));
+    for (int i = 0; i < 36; ++i) uid += static_cast<char>('0' + digit(rng_));
+    return uid;
+  }
+
+private:
+  std::mt19937_64 rng_{std::random_device{}()};
+};
+} // namespace
+
+void writeDicomSeries(const ImageType* image, const std::string& directory, double rescaleInterceptHU) {
+  namespace fs = std::filesystem;
+  using ShortImage = itk::Image<std::int16_t, 3>;
+  using SliceImage = itk::Image<std::int16_t, 2>;
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (ec) throw std::runtime_error(directory + ": cannot create directory: " + ec.message());
+
+  // HU as int16 (rounded, clamped). GDCMImageIO applies the inverse of the Rescale Slope/Intercept
+  // found in the dictionary on write (ITK 4.7 migration note "Apply Rescale Slope / Intercept On
+  // Write"): it stores HU - intercept itself. Measured: subtracting here too shifted the values.
+  auto hu = ShortImage::New();
+  hu->CopyInformation(image);
+  hu->SetRegions(image->GetLargestPossibleRegion());
+  hu->Allocate();
+  itk::ImageRegionConstIterator<ImageType> in(image, image->GetLargestPossibleRegion());
+  itk::ImageRegionIterator<ShortImage> out(hu, hu->GetLargestPossibleRegion());
+  for (; !in.IsAtEnd(); ++in, ++out)
+    out.Set(static_cast<std::int16_t>(std::clamp(std::lround(in.Get()), -32768L, 32767L)));
+
+  const auto size = image->GetLargestPossibleRegion().GetSize();
+  const auto dir = image->GetDirection();
+  UidGenerator uid;
+  const std::string study = uid.Generate();
+  const std::string series = uid.Generate();
+  const std::string frame = uid.Generate();
+  auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6f", v);
+    return std::string(buf);
+  };
+  std::ostringstream iop;
+  iop << num(dir[0][0]) << "\\" << num(dir[1][0]) << "\\" << num(dir[2][0]) << "\\"
+      << num(dir[0][1]) << "\\" << num(dir[1][1]) << "\\" << num(dir[2][1]);
+
+  std::vector<itk::MetaDataDictionary> dictionaries(size[2]);
+  std::vector<std::string> files(size[2]);
+  for (unsigned z = 0; z < size[2]; ++z) {
+    auto& d = dictionaries[z];
+    ShortImage::PointType p;
+    hu->TransformIndexToPhysicalPoint({{0, 0, static_cast<long>(z)}}, p);
+    const std::string ipp = num(p[0]) + "\\" + num(p[1]) + "\\" + num(p[2]);
+    itk::EncapsulateMetaData<std::string>(d, "0008|0060", "CT");
+    itk::EncapsulateMetaData<std::string>(d, "0008|0016", "1.2.840.10008.5.1.4.1.1.2");
+    itk::EncapsulateMetaData<std::string>(d, "0008|0018", uid.Generate());
+    itk::EncapsulateMetaData<std::string>(d, "0020|000d", study);
+    itk::EncapsulateMetaData<std::string>(d, "0020|000e", series);
+    itk::EncapsulateMetaData<std::string>(d, "0020|0052", frame);
+    itk::EncapsulateMetaData<std::string>(d, "0020|0013", std::to_string(z + 1));
+    itk::EncapsulateMetaData<std::string>(d, "0020|0032", ipp);
+    itk::EncapsulateMetaData<std::string>(d, "0020|0037", iop.str());
+    itk::EncapsulateMetaData<std::string>(d, "0018|0050", num(image->GetSpacing()[2]));
+    itk::EncapsulateMetaData<std::string>(d, "0028|1052", num(rescaleInterceptHU));
+    itk::EncapsulateMetaData<std::string>(d, "0028|1053", "1");
+    char name[32];
+    std::snprintf(name, sizeof name, "slice%04u.dcm", z);
+    files[z] = (fs::path(directory) / name).string();
+  }
+
+  auto io = itk::GDCMImageIO::New();
+  io->KeepOriginalUIDOn();
+  auto writer = itk::ImageSeriesWriter<ShortImage, SliceImage>::New();
+  writer->SetInput(hu);
+  writer->SetImageIO(io);
+  writer->SetFileNames(files);
+  std::vector<itk::MetaDataDictionary*> dictionaryPointers;
+  for (auto& d : dictionaries) dictionaryPointers.push_back(&d);
+  writer->SetMetaDataDictionaryArray(&dictionaryPointers);
+  try {
+    writer->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw std::runtime_error(directory + ": cannot write DICOM series: " + e.GetDescription());
+  }
+}
+
+} // namespace cementsph::imaging

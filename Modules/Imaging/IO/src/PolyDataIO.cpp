@@ -1,0 +1,35 @@
+#include "cementsph/imaging/PolyDataIO.h"
+
+#include "cementsph/imaging/AtomicFile.h"
+
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLPolyDataWriter.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace cementsph::imaging {
+
+void writePolyData(vtkPolyData* surface, const std::string& path) {
+  if (!surface) throw std::runtime_error(path + ": nothing to write");
+  writeAtomically(path, [&](const std::string& tmp) {
+    auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
+    writer->SetFileName(tmp.c_str());
+    writer->SetInputData(surface);
+    writer->SetDataModeToAppended();
+    writer->SetCompressorTypeToZLib();
+    if (writer->Write() != 1) throw std::runtime_error("VTK could not write the surface");
+  });
+}
+
+vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": no such file");
+  auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  if (reader->GetErrorCode() != 0 || !reader->GetOutput())
+    throw std::runtime_error(path + ": cannot read surface");
+  return reader->GetOutput();
+}
+
+} // namespace cementsph::imaging

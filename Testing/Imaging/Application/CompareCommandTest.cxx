@@ -1,0 +1,198 @@
+// The `cementsph compare` and `register` commands, run as a user would: outputs and metrics.json
+// keys on a synthetic case; clear messages, non-zero exits and no partial output on bad input;
+// an honest zero when there is no cement.
+#include "SyntheticVolumes.h"
+#include "cementsph/imaging/VolumeIO.h"
+
+#include <gtest/gtest.h>
+#include <itkImageFileWriter.h>
+#include <itkNrrdImageIO.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using namespace cementsph::testing;
+using cementsph::imaging::writeVolume;
+
+namespace {
+
+struct ProgramRun {
+  int exitCode = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+ProgramRun run(const std::string& args, const fs::path& scratch) {
+  const std::string cmd = std::string(CEMENTSPH_EXE) + " " + args + " > " + (scratch / "stdout.txt").string() +
+                          " 2> " + (scratch / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  ProgramRun r;
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(scratch / "stdout.txt");
+  r.err = slurp(scratch / "stderr.txt");
+  return r;
+}
+
+class CompareCommand : public ::testing::Test {
+protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "compare-command";
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    CompareCase c;
+    c.grid.size = {60, 60, 56};
+    c.grid.spacing = {0.7, 0.7, 0.75};
+    c.grid.origin = {-20.65, -20.65, -20.625};
+    c.semiAxesMm = {17, 15, 16};
+    c.seed = 3;
+    c.rotationDeg = {2, -3, 4};
+    c.translationMm = {1.5, -1.0, 2.0};
+    // Post: a 6 mm ball; the "simulation": a slightly larger ball, displaced 1 mm.
+    c.cementRadiusMm = 6.0;
+    c.simRadiusMm = 6.5;
+    c.simOffsetMm = 1.0;
+    tip_ = writeCompareCase(c, dir_.string());
+    const Grid& grid = c.grid;
+    const BonePhantom phantom(gridCentre(grid), c.semiAxesMm, c.seed);
+    // Post scanned somewhere else entirely: no overlap with pre.
+    Grid far = grid;
+    far.origin = {900, 900, 900};
+    writeVolume(sample(phantom, far), (dir_ / "far.nrrd").string());
+  }
+
+  std::string point() const {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%.3f,%.3f,%.3f", tip_[0], tip_[1], tip_[2]);
+    return buf;
+  }
+  std::string common(const std::string& post, const std::string& out) const {
+    return "compare --pre " + (dir_ / "pre.nrrd").string() + " --post " + post +
+           " --injection-point-mm " + point() + " --out " + (dir_ / out).string();
+  }
+
+  static inline fs::path dir_;
+  static inline Vec3 tip_{};
+};
+
+bool hasTemporaries(const fs::path& dir) {
+  if (!fs::exists(dir)) return false;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+  return false;
+}
+
+} // namespace
+
+TEST_F(CompareCommand, HelpNamesTheUnits) {
+  const ProgramRun r = run("compare --help", dir_);
+  EXPECT_EQ(r.exitCode, 0);
+  EXPECT_NE(r.out.find("--injection-point-mm"), std::string::npos);
+  EXPECT_NE(r.out.find("--threshold-hu"), std::string::npos);
+}
+
+TEST_F(CompareCommand, WritesMetricsSurfacesAndVolumes) {
+  const ProgramRun r = run(common((dir_ / "post.nrrd").string(), "ok") + " --simulated " + (dir_ / "sim.nrrd").string(), dir_);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const fs::path out = dir_ / "ok";
+  for (const char* f : {"metrics.json", "registered_post.nrrd", "post_to_pre_affine.tfm", "cement_ct_mask.nrrd",
+                        "cement_simulated_mask.nrrd", "cement_ct_surface.vtp", "cement_simulated_surface.vtp"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  EXPECT_FALSE(hasTemporaries(out));
+  const auto m = nlohmann::json::parse(slurp(out / "metrics.json"));
+  for (const char* key : {"cement_volume_ml", "mean_spreading_distance_mm", "error_mm", "hausdorff_mm",
+                          "hausdorff95_mm", "dice", "jaccard", "centroid_offset_mm"})
+    ASSERT_TRUE(m.contains(key) && m[key].is_number()) << key;
+  for (const char* key : {"ct_to_simulated_distance", "simulated_to_ct_distance"})
+    for (const char* sub : {"mean_mm", "max_mm", "std_mm"}) ASSERT_TRUE(m[key][sub].is_number()) << key << sub;
+  // The synthetic ball (r = 6 mm, 3000 HU) has a logistic edge of scale 0.35 mm: the default 500 HU
+  // threshold (w = 1/6) puts the mask's edge at r + 0.35 ln 5 = 6.56 mm, i.e. 1.18 ml.
+  const double edge = 6.0 + 0.35 * std::log(5.0);
+  const double ballMl = 4.0 / 3.0 * M_PI * edge * edge * edge / 1000.0;
+  EXPECT_NEAR(m["cement_volume_ml"].get<double>(), ballMl, 0.08 * ballMl);
+  // A ball centred 1 mm from the injection point: mean spreading distance ~ 3R/4 = 4.5 mm.
+  EXPECT_NEAR(m["mean_spreading_distance_mm"].get<double>(), 4.6, 1.0);
+  EXPECT_GT(m["dice"].get<double>(), 0.6);
+  EXPECT_LT(m["error_mm"].get<double>(), 2.0);
+  EXPECT_GE(m["hausdorff_mm"].get<double>(), m["hausdorff95_mm"].get<double>());
+  EXPECT_NEAR(m["centroid_offset_mm"].get<double>(), 1.0, 0.6);
+  EXPECT_FALSE(m["registration"]["levels"].empty());
+  EXPECT_NE(r.out.find("error (larger mean)"), std::string::npos) << r.out;
+}
+
+TEST_F(CompareCommand, RegisterStandsOnItsOwn) {
+  const fs::path out = dir_ / "register";
+  fs::create_directories(out);
+  const ProgramRun r = run("register --fixed " + (dir_ / "pre.nrrd").string() + " --moving " +
+                        (dir_ / "post.nrrd").string() + " --out-transform " + (out / "t.tfm").string() +
+                        " --out-image " + (out / "r.nrrd").string(),
+                    dir_);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "t.tfm"));
+  EXPECT_TRUE(fs::exists(out / "r.nrrd"));
+  EXPECT_NE(r.out.find("final metric"), std::string::npos);
+}
+
+TEST_F(CompareCommand, NoCementIsAReportedZero) {
+  const ProgramRun r = run(common((dir_ / "pre.nrrd").string(), "none"), dir_);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("no cement found"), std::string::npos) << r.err;
+  const auto m = nlohmann::json::parse(slurp(dir_ / "none" / "metrics.json"));
+  EXPECT_EQ(m["cement_volume_ml"].get<double>(), 0.0);
+  EXPECT_FALSE(fs::exists(dir_ / "none" / "cement_ct_surface.vtp"));
+}
+
+TEST_F(CompareCommand, BadInputFailsCleanlyWithoutOutput) {
+  // Missing file.
+  ProgramRun r = run(common((dir_ / "missing.nrrd").string(), "bad1"), dir_);
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.err.find("missing.nrrd: no such file"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad1"));
+  // Corrupt file.
+  std::ofstream(dir_ / "corrupt.nrrd") << "NRRD0004\ngarbage\n";
+  r = run(common((dir_ / "corrupt.nrrd").string(), "bad2"), dir_);
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.err.find("corrupt.nrrd"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad2"));
+  // Truncated file.
+  fs::copy_file(dir_ / "post.nrrd", dir_ / "truncated.nrrd", fs::copy_options::overwrite_existing);
+  fs::resize_file(dir_ / "truncated.nrrd", fs::file_size(dir_ / "truncated.nrrd") / 2);
+  r = run(common((dir_ / "truncated.nrrd").string(), "bad3"), dir_);
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_FALSE(fs::exists(dir_ / "bad3"));
+  // A 2-D image.
+  using Image2 = itk::Image<float, 2>;
+  auto flat = Image2::New();
+  flat->SetRegions(Image2::RegionType({{0, 0}}, {{16, 16}}));
+  flat->Allocate();
+  flat->FillBuffer(0.0f);
+  auto writer = itk::ImageFileWriter<Image2>::New();
+  writer->SetImageIO(itk::NrrdImageIO::New());
+  writer->SetInput(flat);
+  writer->SetFileName((dir_ / "flat.nrrd").string());
+  writer->Update();
+  r = run(common((dir_ / "flat.nrrd").string(), "bad4"), dir_);
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.err.find("not a 3-D volume"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad4"));
+  // Volumes that do not overlap in space.
+  r = run(common((dir_ / "far.nrrd").string(), "bad5"), dir_);
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.err.find("do not overlap"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad5"));
+  // Missing required option: CLI11's usage error.
+  r = run("compare --pre " + (dir_ / "pre.nrrd").string(), dir_);
+  EXPECT_NE(r.exitCode, 0);
+}
