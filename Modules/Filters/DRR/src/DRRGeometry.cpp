@@ -36,8 +36,9 @@ std::string DRRGeometry::validate() const {
 }
 
 Vec3 DRRGeometry::beamDirection() const {
+  // plastimatch's sense of rotation: the source sits at isocentre + sad * (cos a, -sin a, 0).
   const double a = gantryAngleDeg * kPi / 180.0;
-  return {-std::cos(a), -std::sin(a), 0.0};
+  return {-std::cos(a), std::sin(a), 0.0};
 }
 
 Vec3 DRRGeometry::horizontalAxis() const {

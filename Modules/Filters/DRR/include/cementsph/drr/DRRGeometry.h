@@ -1,6 +1,9 @@
 // The projection geometry of a DRR, with plastimatch's (`plastimatch drr`) conventions so that a user
 // can compare images pixel for pixel:
-//  - the source sits at isocentre + sad * (cos a, sin a, 0), a being the gantry angle about z;
+//  - the source sits at isocentre + sad * (cos a, -sin a, 0), a being the gantry angle about z
+//    (a = 0: source on +x; a = 90 deg: source on -y), as plastimatch 1.9 places it. (Debian 12's
+//    plastimatch 1.9.4 reads its --gantry-angle in radians although its help says degrees; ours is
+//    in degrees, so compare with `plastimatch drr -y <a * pi / 180>`.)
 //  - the detector is perpendicular to the beam axis, sid from the source, centred on that axis;
 //  - its horizontal axis u = beam x z, its vertical axis (up) = u x beam; for a = 0 the source is on
 //    +x, u is +y and up is +z.

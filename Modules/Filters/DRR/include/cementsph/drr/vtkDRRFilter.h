@@ -40,7 +40,7 @@ public:
   vtkSetVector3Macro(Isocenter, double);
   vtkGetVector3Macro(Isocenter, double);
 
-  // Gantry angle about z, degrees: 0 puts the source on +x of the isocentre, 90 on +y.
+  // Gantry angle about z, degrees: 0 puts the source on +x of the isocentre, 90 on -y (plastimatch's sense).
   vtkSetMacro(GantryAngle, double);
   vtkGetMacro(GantryAngle, double);
 
