@@ -94,7 +94,11 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
     // Refuse a bad geometry before reading anything (the same check the filter makes).
     if (const std::string problem = geometry.validate(); !problem.empty()) throw std::runtime_error(problem);
 
+    auto seconds = [](std::chrono::steady_clock::time_point since) {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+    };
     const ImageType::Pointer ct = readVolume(a->volume);
+    const double readSeconds = seconds(start);
     const VolumeGeometry vg = geometryOf(ct);
     if (a->isocenterMm.empty()) {
       const auto b = vg.physicalBounds();
@@ -104,7 +108,9 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
     }
     if (const std::string problem = geometry.validate(); !problem.empty()) throw std::runtime_error(problem);
 
+    auto t = std::chrono::steady_clock::now();
     vtkSmartPointer<vtkImageData> hu = toVtk(ct.GetPointer());
+    const double bridgeSeconds = seconds(t);
     vtkNew<vtkDRRFilter> drr;
     drr->SetInputData(hu);
     drr->SetSourceAxisDistance(geometry.sadMm);
@@ -117,14 +123,15 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
     drr->SetGantryAngle(geometry.gantryAngleDeg);
     drr->SetParallelBeam(geometry.parallel);
     drr->SetNumberOfThreads(a->threads);
-    const auto t = std::chrono::steady_clock::now();
+    t = std::chrono::steady_clock::now();
     drr->Update();
-    const double drrSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    const double drrSeconds = seconds(t);
     if (drr->GetErrorCode() != 0 || !drr->GetOutput()->GetPointData()->GetScalars())
       throw std::runtime_error("the DRR could not be computed");
     vtkImageData* image = drr->GetOutput();
 
     // Write: directory, numbers, picture. If the picture fails, the numbers go too (no half output).
+    t = std::chrono::steady_clock::now();
     std::error_code ec;
     fs::create_directories(a->out, ec);
     if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
@@ -140,13 +147,14 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
 
     double range[2];
     image->GetPointData()->GetScalars()->GetRange(range, 0);
-    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double writeSeconds = seconds(t), total = seconds(start);
     std::ostringstream s;
     s << "DRR " << geometry.rows << "x" << geometry.cols << " px ("
       << (geometry.parallel ? "parallel beam" : "cone beam") << ", gantry " << geometry.gantryAngleDeg
       << " deg, isocentre " << geometry.isocenterMm[0] << "," << geometry.isocenterMm[1] << ","
       << geometry.isocenterMm[2] << " mm): max " << range[1] << " (line integral of mu in 1/mm, / 10)\n"
-      << "wrote " << nrrd << " and " << png << " (DRR " << drrSeconds << " s, total " << total << " s)\n";
+      << "wrote " << nrrd << " and " << png << " (read " << readSeconds << " s, ITK->VTK " << bridgeSeconds
+      << " s, DRR " << drrSeconds << " s, write " << writeSeconds << " s, total " << total << " s)\n";
     std::cout << s.str();
     return 0;
   };
