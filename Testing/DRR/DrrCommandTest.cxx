@@ -2,6 +2,7 @@
 // detector's geometry, drr.png is an 8-bit picture of the same size; bad input gives one clear line
 // on stderr, a non-zero exit and no output at all.
 #include "DRRTestVolumes.h"
+#include "ProgramRun.h"
 #include "cementsph/drr/vtkDRRFilter.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
@@ -13,38 +14,18 @@
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
 
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 using namespace cementsph::drrtest;
+using cementsph::testing::ProgramRun;
 
 namespace {
 
-struct ProgramRun {
-  int exitCode = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-ProgramRun run(const std::string& args, const fs::path& scratch) {
-  const std::string cmd = std::string(CEMENTSPH_EXE) + " drr " + args + " > " + (scratch / "stdout.txt").string() +
-                          " 2> " + (scratch / "stderr.txt").string();
-  const int status = std::system(cmd.c_str());
-  ProgramRun r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = slurp(scratch / "stdout.txt");
-  r.err = slurp(scratch / "stderr.txt");
-  return r;
+// `cementsph drr ARGS...`
+ProgramRun drr(std::vector<std::string> args) {
+  args.insert(args.begin(), "drr");
+  return cementsph::testing::runProgram(CEMENTSPH_EXE, args);
 }
 
 class DrrCommand : public ::testing::Test {
@@ -71,10 +52,9 @@ vtkSmartPointer<vtkImageData> DrrCommand::volume_;
 
 TEST_F(DrrCommand, WritesTheFilterNumbersAndAPicture) {
   const fs::path out = dir_ / "ok";
-  const ProgramRun r = run("--volume " + (dir_ / "ct.nrrd").string() + " --out " + out.string() +
-                               " --detector-pixels 48,64 --detector-size-mm 96,128 --sad-mm 900 --sid-mm 1400"
-                               " --isocenter-mm 4,-2,1 --gantry-angle-deg 25 --threads 2",
-                           dir_);
+  const ProgramRun r = drr({"--volume", (dir_ / "ct.nrrd").string(), "--out", out.string(), "--detector-pixels",
+                            "48,64", "--detector-size-mm", "96,128", "--sad-mm", "900", "--sid-mm", "1400",
+                            "--isocenter-mm", "4,-2,1", "--gantry-angle-deg", "25", "--threads", "2"});
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_NE(r.out.find("wrote"), std::string::npos);
   ASSERT_TRUE(fs::exists(out / "drr.nrrd"));
@@ -127,9 +107,8 @@ TEST_F(DrrCommand, WritesTheFilterNumbersAndAPicture) {
 }
 
 TEST_F(DrrCommand, ParallelBeamRuns) {
-  const ProgramRun r = run("--volume " + (dir_ / "ct.nrrd").string() + " --out " + (dir_ / "par").string() +
-                               " --parallel --detector-pixels 20,20 --detector-size-mm 60,60",
-                           dir_);
+  const ProgramRun r = drr({"--volume", (dir_ / "ct.nrrd").string(), "--out", (dir_ / "par").string(), "--parallel",
+                            "--detector-pixels", "20,20", "--detector-size-mm", "60,60"});
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_NE(r.out.find("parallel beam"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir_ / "par" / "drr.nrrd"));
@@ -138,22 +117,25 @@ TEST_F(DrrCommand, ParallelBeamRuns) {
 TEST_F(DrrCommand, BadInputIsOneLineNonZeroAndNoOutput) {
   const std::string ct = (dir_ / "ct.nrrd").string();
   const struct {
-    std::string args, message;
+    std::vector<std::string> args;
+    std::string message;
   } cases[] = {
-      {"--volume " + (dir_ / "missing.nrrd").string(), "missing.nrrd"},
-      {"--volume " + ct + " --sad-mm 1000 --sid-mm 800", "source-image distance"},
-      {"--volume " + ct + " --detector-pixels 0,10", "at least 1x1 pixels"},
-      {"--volume " + ct + " --detector-size-mm 100,-5", "detector size must be positive"},
-      {"--volume " + ct + " --threads -1", "--threads"},
+      {{"--volume", (dir_ / "missing.nrrd").string()}, "missing.nrrd"},
+      {{"--volume", ct, "--sad-mm", "1000", "--sid-mm", "800"}, "source-image distance"},
+      {{"--volume", ct, "--detector-pixels", "0,10"}, "at least 1x1 pixels"},
+      {{"--volume", ct, "--detector-size-mm", "100,-5"}, "detector size must be positive"},
+      {{"--volume", ct, "--threads", "-1"}, "--threads"},
   };
   int n = 0;
   for (const auto& c : cases) {
     const fs::path out = dir_ / ("bad" + std::to_string(n++));
-    const ProgramRun r = run(c.args + " --out " + out.string(), dir_);
-    EXPECT_NE(r.exitCode, 0) << c.args;
+    std::vector<std::string> args = c.args;
+    args.insert(args.end(), {"--out", out.string()});
+    const ProgramRun r = drr(args);
+    EXPECT_NE(r.exitCode, 0) << c.message;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_EQ(r.err.rfind("cementsph drr: error: ", 0), 0u) << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << c.args;
+    EXPECT_FALSE(fs::exists(out)) << c.message;
   }
 }
