@@ -61,17 +61,32 @@ Vec3 DRRGeometry::pixelCentre(double i, double j) const {
   return add(p, verticalAxis(), (j - 0.5 * (rows - 1)) * pixelHeightMm());
 }
 
-Ray DRRGeometry::ray(int i, int j) const {
+DetectorFrame DRRGeometry::frame() const {
+  DetectorFrame f;
+  f.source = source();
+  f.beam = beamDirection();
+  f.pixel00 = pixelCentre(0.0, 0.0);
+  const Vec3 u = horizontalAxis(), up = verticalAxis();
+  for (int a = 0; a < 3; ++a) {
+    f.stepI[a] = u[a] * pixelWidthMm();
+    f.stepJ[a] = up[a] * pixelHeightMm();
+  }
+  f.parallel = parallel;
+  return f;
+}
+
+Ray DetectorFrame::ray(int i, int j) const {
   Ray r;
-  const Vec3 pixel = pixelCentre(i, j);
+  Vec3 pixel;
+  for (int a = 0; a < 3; ++a) pixel[a] = pixel00[a] + i * stepI[a] + j * stepJ[a];
   if (parallel) {
-    r.direction = beamDirection();
+    r.direction = beam;
     r.origin = add(pixel, r.direction, -kParallelHalfLengthMm);
     r.tMax = 2.0 * kParallelHalfLengthMm;
     return r;
   }
-  r.origin = source();
-  const Vec3 d{pixel[0] - r.origin[0], pixel[1] - r.origin[1], pixel[2] - r.origin[2]};
+  r.origin = source;
+  const Vec3 d{pixel[0] - source[0], pixel[1] - source[1], pixel[2] - source[2]};
   const double length = std::sqrt(dot(d, d));
   r.direction = {d[0] / length, d[1] / length, d[2] / length};
   r.tMax = length;

@@ -97,6 +97,7 @@ int vtkDRRFilter::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   try {
     const cementsph::drr::AttenuationVolume volume(input, threads);
     this->UpdateProgress(0.05);
+    const cementsph::drr::DetectorFrame frame = g.frame();
     if (volume.attenuatingVoxels() > 0) {
       int rowsDone = 0;
       // Rows in small dynamic chunks: rays through the middle of the object cost more than rays
@@ -105,7 +106,7 @@ int vtkDRRFilter::RequestData(vtkInformation*, vtkInformationVector** inputVecto
       for (int j = 0; j < g.rows; ++j) {
         float* row = pixels + static_cast<std::size_t>(j) * g.cols;
         for (int i = 0; i < g.cols; ++i)
-          row[i] = static_cast<float>(kPlastimatchScale * volume.lineIntegral(g.ray(i, j)));
+          row[i] = static_cast<float>(kPlastimatchScale * volume.lineIntegral(frame.ray(i, j)));
         // Progress observers may touch non-thread-safe state, so only the calling thread reports.
         int done;
 #pragma omp atomic capture

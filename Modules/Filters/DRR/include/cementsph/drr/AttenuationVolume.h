@@ -26,16 +26,21 @@ public:
 
   // Reads the first scalar component of image (any numeric type) as HU. Throws std::invalid_argument
   // for an image without scalars, with no voxels or with a singular index-to-physical matrix.
+  // A single-component float image is read in place: it must outlive this object, unchanged.
   AttenuationVolume(vtkImageData* image, int threads);
+  AttenuationVolume(const AttenuationVolume&) = delete;
+  AttenuationVolume& operator=(const AttenuationVolume&) = delete;
 
   // Integral of mu along the ray over [tMin, tMax] (dimensionless: 1/mm times mm).
   double lineIntegral(const Ray& ray) const;
 
-  // Number of voxels with mu > 0 (0: the volume is all air; every ray integrates to 0).
+  // Number of voxels with mu > 0 (HU > -800; 0: the volume is all air, every ray integrates to 0).
   std::size_t attenuatingVoxels() const { return attenuating_; }
 
 private:
-  std::vector<float> mu_;
+  // HU, converted to mu voxel by voxel during the walk (cheaper than a converted copy of the volume).
+  const float* hu_ = nullptr;
+  std::vector<float> ownedHU_; // only for inputs that are not single-component float
   int dims_[3] = {0, 0, 0};
   std::ptrdiff_t stride_[3] = {1, 0, 0};
   double physicalToIndex_[12] = {}; // 3x4 row-major: continuous index of a physical point, 0-based

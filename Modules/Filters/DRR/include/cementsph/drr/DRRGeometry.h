@@ -28,6 +28,21 @@ struct Ray {
   double tMax = 0.0;
 };
 
+// The detector as vectors, computed once per image (a per-ray recomputation of the trigonometry
+// would cost about as much as the voxel walk itself).
+struct DetectorFrame {
+  Vec3 source{};    // ray origin (cone beam)
+  Vec3 beam{};      // unit, source -> detector
+  Vec3 pixel00{};   // centre of output pixel (0, 0)
+  Vec3 stepI{};     // from pixel (i, j) to (i + 1, j), mm
+  Vec3 stepJ{};     // from pixel (i, j) to (i, j + 1), mm
+  bool parallel = false;
+
+  // The ray for output pixel (i, j): cone beam, source to pixel; parallel beam, a segment along the
+  // beam long enough to cross any volume within 1e6 mm of the isocentre.
+  Ray ray(int i, int j) const;
+};
+
 struct DRRGeometry {
   double sadMm = 1000.0;                 // source to isocentre
   double sidMm = 1500.0;                 // source to detector
@@ -57,9 +72,8 @@ struct DRRGeometry {
   // the isocentre).
   Vec3 pixelCentre(double i, double j) const;
 
-  // The ray for output pixel (i, j): cone beam, source to pixel; parallel beam, a segment long
-  // enough to cross any volume within 1e6 mm of the isocentre.
-  Ray ray(int i, int j) const;
+  DetectorFrame frame() const;
+  Ray ray(int i, int j) const { return frame().ray(i, j); } // see DetectorFrame::ray
 
   // Continuous output pixel coordinates (i, j) where a physical point projects.
   std::array<double, 2> project(const Vec3& pointMm) const;
