@@ -389,3 +389,19 @@ TEST(vtkDRRFilterTest, RefusesABadGeometry) {
   g.rows = 0;
   EXPECT_FALSE(g.validate().empty());
 }
+
+TEST(DRRGeometryTest, ExtentThatDoesNotStartAtZeroIsHonoured) {
+  // VTK places voxel (i, j, k) of the extent at origin + spacing * (i, j, k): the same voxels stored
+  // with an extent starting at (3, -2, 4) and the origin moved back by as much are the same object.
+  const VolumeGrid grid = centredGrid({31, 29, 27}, {1.0, 1.0, 1.0}, {0, 0, 0});
+  auto a = voxelise(grid, balls({{{1.1, -2.3, 0.7}, 9.3, 700.0}, {{4.2, 3.1, -2.2}, 3.2, 2500.0}}));
+  auto b = vtkSmartPointer<vtkImageData>::New();
+  b->DeepCopy(a);
+  b->SetExtent(3, 33, -2, 26, 4, 30);
+  b->SetOrigin(grid.origin[0] - 3.0, grid.origin[1] + 2.0, grid.origin[2] - 4.0);
+  for (bool parallel : {true, false}) {
+    const Drr da = project(a, detector(61, 61.0, parallel)), db = project(b, detector(61, 61.0, parallel));
+    ASSERT_EQ(da.v.size(), db.v.size());
+    for (std::size_t k = 0; k < da.v.size(); ++k) ASSERT_EQ(da.v[k], db.v[k]) << k;
+  }
+}
