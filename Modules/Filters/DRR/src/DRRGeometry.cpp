@@ -8,8 +8,6 @@ namespace cementsph::drr {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-// Parallel rays are segments this long on each side of the detector plane: longer than any volume.
-constexpr double kParallelHalfLengthMm = 1.0e6;
 
 Vec3 add(const Vec3& a, const Vec3& b, double s) { return {a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]}; }
 double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -73,24 +71,6 @@ DetectorFrame DRRGeometry::frame() const {
   }
   f.parallel = parallel;
   return f;
-}
-
-Ray DetectorFrame::ray(int i, int j) const {
-  Ray r;
-  Vec3 pixel;
-  for (int a = 0; a < 3; ++a) pixel[a] = pixel00[a] + i * stepI[a] + j * stepJ[a];
-  if (parallel) {
-    r.direction = beam;
-    r.origin = add(pixel, r.direction, -kParallelHalfLengthMm);
-    r.tMax = 2.0 * kParallelHalfLengthMm;
-    return r;
-  }
-  r.origin = source;
-  const Vec3 d{pixel[0] - source[0], pixel[1] - source[1], pixel[2] - source[2]};
-  const double length = std::sqrt(dot(d, d));
-  r.direction = {d[0] / length, d[1] / length, d[2] / length};
-  r.tMax = length;
-  return r;
 }
 
 std::array<double, 2> DRRGeometry::project(const Vec3& pointMm) const {

@@ -1,4 +1,4 @@
-// A CT volume turned into linear attenuation (1/mm) and the exact line integral through it.
+// A CT volume seen as linear attenuation (1/mm), and the exact line integral through it.
 // HU -> mu as plastimatch ("water at 50 keV"): mu = 0.022 /mm * (1 + HU/1000) for HU > -800, else 0.
 // The line integral is an exact voxel walk (Amanatides-Woo 3-D DDA, i.e. Siddon's method): every voxel
 // the ray crosses contributes mu * (length of the ray inside it, mm), so there is no sampling error.
@@ -7,7 +7,7 @@
 // parameter is the physical distance along the ray.
 #pragma once
 
-#include "cementsph/drr/DRRGeometry.h"
+#include "cementsph/drr/Ray.h"
 
 #include <cstddef>
 #include <vector>
