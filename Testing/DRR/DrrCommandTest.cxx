@@ -1,7 +1,7 @@
 // The `cementsph drr` command, run as a user would: drr.nrrd holds the filter's numbers with the
 // detector's geometry, drr.png is an 8-bit picture of the same size; bad input gives one clear line
 // on stderr, a non-zero exit and no output at all.
-#include "DRRTestVolumes.h"
+#include "DRRTestSupport.h"
 #include "ProgramRun.h"
 #include "cementsph/drr/vtkDRRFilter.h"
 #include "cementsph/imaging/ItkVtkBridge.h"

@@ -1,8 +1,14 @@
-#include "DRRTestVolumes.h"
+#include "DRRTestSupport.h"
+
+#include "cementsph/drr/vtkDRRFilter.h"
+
+#include <gtest/gtest.h>
+#include <vtkNew.h>
 
 #include <vtkFloatArray.h>
 #include <vtkPointData.h>
 
+#include <cmath>
 #include <vector>
 
 namespace cementsph::drrtest {
@@ -55,6 +61,66 @@ Phantom balls(std::vector<Ball> list) {
     }
     return hu;
   };
+}
+
+double Drr::sum() const {
+  double s = 0;
+  for (float x : v) s += x;
+  return s;
+}
+
+std::array<double, 3> Drr::moments() const {
+  double s = 0, si = 0, sj = 0;
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < cols; ++i) {
+      s += at(i, j);
+      si += at(i, j) * i;
+      sj += at(i, j) * j;
+    }
+  const double ci = si / s, cj = sj / s;
+  double r2 = 0;
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < cols; ++i) r2 += at(i, j) * ((i - ci) * (i - ci) + (j - cj) * (j - cj));
+  return {ci, cj, std::sqrt(r2 / s)};
+}
+
+Drr project(vtkImageData* volume, const drr::DRRGeometry& g, int threads) {
+  vtkNew<vtkDRRFilter> f;
+  f->SetInputData(volume);
+  f->SetSourceAxisDistance(g.sadMm);
+  f->SetSourceImageDistance(g.sidMm);
+  f->SetDetectorRows(g.rows);
+  f->SetDetectorColumns(g.cols);
+  f->SetDetectorHeight(g.heightMm);
+  f->SetDetectorWidth(g.widthMm);
+  f->SetIsocenter(g.isocenterMm[0], g.isocenterMm[1], g.isocenterMm[2]);
+  f->SetGantryAngle(g.gantryAngleDeg);
+  f->SetParallelBeam(g.parallel);
+  f->SetNumberOfThreads(threads);
+  f->Update();
+  EXPECT_EQ(f->GetErrorCode(), 0u);
+  vtkImageData* out = f->GetOutput();
+  Drr d;
+  int dims[3];
+  out->GetDimensions(dims);
+  d.cols = dims[0];
+  d.rows = dims[1];
+  EXPECT_EQ(dims[2], 1);
+  EXPECT_EQ(out->GetScalarType(), VTK_FLOAT);
+  d.pixelW = out->GetSpacing()[0];
+  d.pixelH = out->GetSpacing()[1];
+  const float* p = static_cast<const float*>(out->GetScalarPointer());
+  d.v.assign(p, p + static_cast<std::size_t>(d.cols) * d.rows);
+  return d;
+}
+
+drr::DRRGeometry detector(int n, double sizeMm, bool parallel, const Vec3& iso) {
+  drr::DRRGeometry g;
+  g.rows = g.cols = n;
+  g.heightMm = g.widthMm = sizeMm;
+  g.parallel = parallel;
+  g.isocenterMm = iso;
+  return g;
 }
 
 } // namespace cementsph::drrtest
