@@ -11,6 +11,8 @@
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
 
+#include <vtkCallbackCommand.h>
+#include <vtkCommand.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkImageShiftScale.h>
@@ -123,11 +125,22 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
     drr->SetGantryAngle(geometry.gantryAngleDeg);
     drr->SetParallelBeam(geometry.parallel);
     drr->SetNumberOfThreads(a->threads);
+    // VTK errors become this command's one-line error (an observer also keeps VTK from printing them).
+    std::string vtkError;
+    vtkNew<vtkCallbackCommand> onError;
+    onError->SetClientData(&vtkError);
+    onError->SetCallback([](vtkObject*, unsigned long, void* client, void* callData) {
+      std::string text = callData ? static_cast<const char*>(callData) : "";
+      while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+      const auto colon = text.rfind("): "); // "...vtkDRRFilter (0x...): message"
+      *static_cast<std::string*>(client) = colon == std::string::npos ? text : text.substr(colon + 3);
+    });
+    drr->AddObserver(vtkCommand::ErrorEvent, onError);
     t = std::chrono::steady_clock::now();
     drr->Update();
     const double drrSeconds = seconds(t);
-    if (drr->GetErrorCode() != 0 || !drr->GetOutput()->GetPointData()->GetScalars())
-      throw std::runtime_error("the DRR could not be computed");
+    if (!vtkError.empty() || !drr->GetOutput()->GetPointData()->GetScalars())
+      throw std::runtime_error("the DRR could not be computed" + (vtkError.empty() ? "" : ": " + vtkError));
     vtkImageData* image = drr->GetOutput();
 
     // Write: directory, numbers, picture. If the picture fails, the numbers go too (no half output).

@@ -1,6 +1,6 @@
 // Unit checks of the DRR pieces: HU -> mu, the exact voxel walk on a homogeneous box (any ray, any
 // grid orientation), an extent that does not start at 0, thread-count independence, progress events
-// and the refusal of a bad geometry.
+// and the refusal of a bad geometry or an input without voxel values.
 #include "DRRTestSupport.h"
 #include "cementsph/drr/AttenuationVolume.h"
 #include "cementsph/drr/vtkDRRFilter.h"
@@ -9,9 +9,11 @@
 #include <vtkCallbackCommand.h>
 #include <vtkCommand.h>
 #include <vtkNew.h>
+#include <vtkPointData.h>
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 using namespace cementsph::drrtest;
@@ -152,4 +154,23 @@ TEST(DRRGeometryTest, ExtentThatDoesNotStartAtZeroIsHonoured) {
     ASSERT_EQ(da.v.size(), db.v.size());
     for (std::size_t k = 0; k < da.v.size(); ++k) ASSERT_EQ(da.v[k], db.v[k]) << k;
   }
+}
+
+TEST(vtkDRRFilterTest, AnInputWithoutScalarsGivesAnEmptyOutput) {
+  auto empty = vtkSmartPointer<vtkImageData>::New();
+  empty->SetDimensions(4, 4, 4); // geometry but no voxel values
+  vtkNew<vtkDRRFilter> f;
+  f->SetInputData(empty);
+  f->SetDetectorRows(8);
+  f->SetDetectorColumns(8);
+  std::string message;
+  vtkNew<vtkCallbackCommand> onError;
+  onError->SetClientData(&message);
+  onError->SetCallback([](vtkObject*, unsigned long, void* client, void* callData) {
+    *static_cast<std::string*>(client) = static_cast<const char*>(callData);
+  });
+  f->AddObserver(vtkCommand::ErrorEvent, onError);
+  f->Update();
+  EXPECT_NE(message.find("no scalars"), std::string::npos) << message;
+  EXPECT_EQ(f->GetOutput()->GetPointData()->GetScalars(), nullptr);
 }

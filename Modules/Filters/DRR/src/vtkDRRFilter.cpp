@@ -116,6 +116,8 @@ int vtkDRRFilter::RequestData(vtkInformation*, vtkInformationVector** inputVecto
       }
     }
   } catch (const std::exception& e) {
+    // No half-made image downstream: a failed DRR leaves an empty output.
+    output->Initialize();
     vtkErrorMacro(<< e.what());
     return 0;
   }
