@@ -15,6 +15,8 @@
 #include <vtkPNGReader.h>
 
 #include <filesystem>
+#include <string>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace cementsph::drrtest;
@@ -31,7 +33,8 @@ ProgramRun drr(std::vector<std::string> args) {
 class DrrCommand : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
-    dir_ = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "drr-command";
+    // One directory per process: ctest runs each test in its own process, possibly in parallel (-j).
+    dir_ = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / ("drr-command-" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     VolumeGrid grid = centredGrid({41, 37, 33}, {1.0, 1.1, 1.2}, {5.0, -3.0, 2.0});
@@ -41,7 +44,11 @@ protected:
     volume_ = voxelise(grid, balls({{{5.1, -3.2, 2.3}, 12.3, 900.0}, {{9.2, 1.1, 6.3}, 4.1, 3000.0}}));
     cementsph::imaging::writeVolume(cementsph::imaging::imageFromVtk(volume_), (dir_ / "ct.nrrd").string());
   }
-  static void TearDownTestSuite() { volume_ = nullptr; }
+  static void TearDownTestSuite() {
+    volume_ = nullptr;
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
   static fs::path dir_;
   static vtkSmartPointer<vtkImageData> volume_;
 };
