@@ -143,18 +143,21 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
       throw std::runtime_error("the DRR could not be computed" + (vtkError.empty() ? "" : ": " + vtkError));
     vtkImageData* image = drr->GetOutput();
 
-    // Write: directory, numbers, picture. If the picture fails, the numbers go too (no half output).
+    // Write: directory, numbers, picture. If a write fails, what this run made goes again (the numbers,
+    // and the directory if it created it): no half output.
     t = std::chrono::steady_clock::now();
-    std::error_code ec;
-    fs::create_directories(a->out, ec);
-    if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
     const fs::path out(a->out);
+    std::error_code ec;
+    const bool madeDirectory = !fs::exists(out, ec);
+    fs::create_directories(out, ec);
+    if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
     const std::string nrrd = (out / "drr.nrrd").string(), png = (out / "drr.png").string();
-    writeVolume(imageFromVtk(image), nrrd);
     try {
+      writeVolume(imageFromVtk(image), nrrd);
       writeDrrPng(image, png);
     } catch (...) {
       fs::remove(nrrd, ec);
+      if (madeDirectory) fs::remove(out, ec); // only if empty
       throw;
     }
 
