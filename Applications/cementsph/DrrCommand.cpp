@@ -152,11 +152,13 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
     fs::create_directories(out, ec);
     if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
     const std::string nrrd = (out / "drr.nrrd").string(), png = (out / "drr.png").string();
+    bool wroteNrrd = false;
     try {
       writeVolume(imageFromVtk(image), nrrd);
+      wroteNrrd = true;
       writeDrrPng(image, png);
     } catch (...) {
-      fs::remove(nrrd, ec);
+      if (wroteNrrd) fs::remove(nrrd, ec);
       if (madeDirectory) fs::remove(out, ec); // only if empty
       throw;
     }
