@@ -12,6 +12,8 @@ PACKAGES=(
   libvtk9-dev libinsighttoolkit5-dev libgdcm-tools libtbb-dev
   # registration reference for the imaging benchmark (issue 3)
   elastix
+  # DRR reference for the DRR benchmark (issue 5): `plastimatch drr -i exact`
+  plastimatch
   # tests, benchmarks, command line, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # off-screen rendering on headless machines (virtual X server + Mesa software GL)
