@@ -12,6 +12,8 @@
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/rendering/SliceComparison.h"
+#include "cementsph/rendering/SurfaceComparison.h"
 #include "cementsph/surfacemetrics/Isosurface.h"
 #include "cementsph/surfacemetrics/SurfaceDistance.h"
 #include "cementsph/surfacemetrics/VolumeMetrics.h"
@@ -19,6 +21,7 @@
 #include <itkIdentityTransform.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +29,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <utility>
 
 namespace {
 
@@ -43,6 +47,7 @@ struct CompareArgs {
   double smoothingVoxels = sm::IsosurfaceOptions{}.smoothingSigmaVoxels;
   bool noRegistration = false;
   bool noCementMask = false;
+  bool noPictures = false;
 };
 
 // One segmented cement: mask, its VTK copy, its surface and volume metrics.
@@ -123,6 +128,9 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
                "POST is already aligned with PRE (it is only resampled onto PRE's grid)");
   sub.add_flag("--no-cement-mask", a->noCementMask,
                "Registration: do not exclude bright (cement) voxels of POST from the metric");
+  sub.add_flag("--no-pictures", a->noPictures,
+               "Do not write slices.png (axial slices every 5 mm, CT above simulated, paper Fig. 11) and "
+               "surfaces.png (CT and simulated isosurfaces and the distance between them, Fig. 7)");
 
   return [a]() {
     const auto start = std::chrono::steady_clock::now();
@@ -260,7 +268,46 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
     metrics["timing_s"] = timing;
     writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
 
-    // 6. Summary.
+    // 6. Pictures, after metrics.json so a rendering failure never loses the numbers. A failed picture
+    // is reported in one line and makes the exit status 3: the user asked for the pictures (they are
+    // on by default; --no-pictures turns them off), and a script should notice they are missing, while
+    // everything already written stays valid.
+    int status = 0;
+    if (!a->noPictures) {
+      auto picture = [&](const char* name, const auto& draw) {
+        const auto pt = std::chrono::steady_clock::now();
+        try {
+          draw(out / name);
+          std::cout << "wrote " << (out / name).string() << " (" << seconds(pt) << " s)\n";
+        } catch (const std::exception& e) {
+          std::cerr << "cementsph compare: picture " << name << " not written (metrics are): " << e.what() << "\n";
+          status = 3;
+        }
+      };
+      picture("slices.png", [&](const fs::path& png) {
+        cementsph::rendering::SliceComparisonOptions options;
+        // Slice through the segmented cement (either one); without any, the default HU threshold decides.
+        double lo = 1e300, hi = -1e300;
+        for (vtkPolyData* surface : {ct.surface.Get(), sim ? sim->surface.Get() : nullptr}) {
+          if (surface == nullptr) continue;
+          double b[6];
+          surface->GetBounds(b);
+          lo = std::min(lo, b[4]);
+          hi = std::max(hi, b[5]);
+        }
+        if (lo <= hi) options.zRangeMm = std::make_pair(lo, hi);
+        auto simulatedVtk = simulated ? toVtk(simulated.GetPointer()) : nullptr;
+        cementsph::rendering::renderSliceComparison(toVtk(registered.GetPointer()), simulatedVtk, png, 5.0,
+                                                    options);
+      });
+      if (surfaces) {
+        picture("surfaces.png", [&](const fs::path& png) {
+          cementsph::rendering::renderSurfaceComparison(ct.surface, sim->surface, png);
+        });
+      }
+    }
+
+    // 7. Summary.
     if (registration) std::cout << "registration (post -> pre):\n" << formatRegistrationReport(*registration);
     char line[200];
     auto row = [&](const char* name, const char* unit, double ctValue, std::optional<double> simValue) {
@@ -289,7 +336,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
     for (const auto& w : warnings) std::cerr << "cementsph compare: warning: " << w.get<std::string>() << "\n";
     std::cout << "wrote " << (out / "metrics.json").string() << " (" << timing["total_s"].get<double>()
               << " s)\n";
-    return 0;
+    return status;
   };
 }
 

@@ -1,0 +1,45 @@
+// The paper's Fig. 11 (Basafa et al. 2013): axial CT slices every few millimetres through the cement,
+// post-operative CT in the top row, simulated CT in the bottom row, both in the same HU window.
+// Pure pixel work on vtkImageData written with vtkPNGWriter: no render window, no display, no GL, so the
+// picture is exactly reproducible and works anywhere.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <utility>
+#include <vector>
+
+class vtkImageData;
+
+namespace cementsph::rendering {
+
+struct SliceComparisonOptions {
+  // HU mapped to black and white (linear in between, clamped): shows bone and cement together.
+  double windowLowHU = -200.0, windowHighHU = 2000.0;
+  // Range of z (mm, patient space) holding the cement. Empty: the z range of the voxels of either volume
+  // at or above cementThresholdHU.
+  std::optional<std::pair<double, double>> zRangeMm;
+  double cementThresholdHU = 1500.0;
+  // At most this many slices (the central ones are kept when the cement spans more).
+  int maxSlices = 12;
+  // Each voxel becomes a pixelScale x pixelScale block; 0: the smallest integer that makes a panel at
+  // least 160 px wide (small volumes would otherwise give thumbnails).
+  int pixelScale = 0;
+  int gapPx = 6; // white gap between panels and around the picture
+};
+
+// The z positions (mm) of the slices renderSliceComparison() draws: spacingMm apart, centred on the
+// cement's z range, at least one. Exposed so callers and tests can label or check them.
+std::vector<double> slicePositionsMm(vtkImageData* postCT, vtkImageData* simulatedCT, double spacingMm,
+                                     const SliceComparisonOptions& options = {});
+
+// Writes a PNG with one column per slice: row 1 postCT, row 2 simulatedCT (omitted when simulatedCT is
+// null). Each slice is the nearest voxel plane to the z position in each volume (no interpolation); a
+// position outside a volume gives a black panel. Image x runs left to right, y (LPS: posterior) down.
+// Throws std::invalid_argument for a null/empty postCT, spacingMm <= 0, an empty HU window, or no
+// voxel at or above the cement threshold (when zRangeMm is empty); std::runtime_error if the file
+// cannot be written. The file is written atomically.
+void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, const std::filesystem::path& png,
+                           double spacingMm = 5.0, const SliceComparisonOptions& options = {});
+
+} // namespace cementsph::rendering
