@@ -182,10 +182,11 @@ TEST(SliceComparison, MatchesBaselineExactly) {
   renderSliceComparison(phantom(0.0), phantom(1.5), png, 5.0);
   std::cout << "renderSliceComparison took " << secondsSince(t) << " s\n";
   // 48 voxels x scale 4 = 192 px panels, 3 slices, 2 rows, 6 px gaps.
-  expectNotBlank(png, 6 + 3 * (192 + 6), 6 + 2 * (160 + 6), 20);
+  expectNotBlank(png, 6 + 3 * (192 + 6), 6 + 2 * (160 + 6), 8); // a few grey levels: air, bone, cement
   expectMatchesBaseline(png, "slice_comparison.png", 0.0);
-  if (!HasFatalFailure() && std::getenv("CEMENTSPH_UPDATE_BASELINES") == nullptr)
+  if (!HasFatalFailure() && std::getenv("CEMENTSPH_UPDATE_BASELINES") == nullptr) {
     EXPECT_EQ(meanAbsoluteDifference(png, kBaselineDir / "slice_comparison.png"), 0.0);
+  }
 }
 
 TEST(SliceComparison, DifferentSimulationDoesNotMatchBaseline) {

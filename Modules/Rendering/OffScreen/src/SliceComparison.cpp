@@ -139,12 +139,14 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
 
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(width, height, 1);
-  image->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  // RGB although the slices are grey: viewers and the project's PNG checks treat 3 channels uniformly.
+  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
   auto* out = static_cast<unsigned char*>(image->GetScalarPointer());
-  std::fill(out, out + static_cast<std::size_t>(width) * height, 255);
+  std::fill(out, out + static_cast<std::size_t>(width) * height * 3, 255);
   // VTK's image row 0 is the PNG's bottom row; `put` takes top-down rows.
   auto put = [&](int x, int yTopDown, unsigned char value) {
-    out[static_cast<std::size_t>(height - 1 - yTopDown) * width + x] = value;
+    unsigned char* px = out + (static_cast<std::size_t>(height - 1 - yTopDown) * width + x) * 3;
+    px[0] = px[1] = px[2] = value;
   };
 
   const double span = options.windowHighHU - options.windowLowHU;

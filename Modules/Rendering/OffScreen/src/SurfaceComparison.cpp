@@ -115,14 +115,16 @@ void renderSurfaceComparison(vtkPolyData* experiment, vtkPolyData* simulation, c
 
   auto bar = vtkSmartPointer<vtkScalarBarActor>::New();
   bar->SetLookupTable(lut);
-  bar->SetTitle("distance (mm)");
-  bar->SetNumberOfLabels(5);
+  // Horizontal, under the surface: a vertical bar beside it would overlap the surface in a third-width panel.
+  bar->SetTitle("mm"); // the panel title says what is measured
+  bar->SetNumberOfLabels(4); // even count: no label under the centred title
   bar->SetLabelFormat("%.1f");
-  bar->SetOrientationToVertical();
+  bar->SetOrientationToHorizontal();
   bar->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
-  bar->SetPosition(0.83, 0.12);
-  bar->SetWidth(0.14);
-  bar->SetHeight(0.72);
+  bar->SetPosition(0.12, 0.02);
+  bar->SetWidth(0.76);
+  bar->SetHeight(0.2);
+  bar->SetBarRatio(0.3);
   bar->UnconstrainedFontSizeOn();
   bar->GetTitleTextProperty()->SetFontSize(16);
   bar->GetTitleTextProperty()->SetColor(0.1, 0.1, 0.1);
@@ -153,7 +155,7 @@ void renderSurfaceComparison(vtkPolyData* experiment, vtkPolyData* simulation, c
     window->AddRenderer(r);
   }
   left->ResetCamera(both); // the shared camera now sees the union's bounding sphere
-  camera->Zoom(1.15);       // the bounding sphere is loose for a box; use the panel a little better
+  camera->Zoom(0.95); // leave room for the titles above and the scalar bar below
   for (vtkRenderer* r : {left.Get(), middle.Get(), right.Get()}) r->ResetCameraClippingRange(both);
 
   writeWindowPng(window, png);
