@@ -286,7 +286,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
       };
       picture("slices.png", [&](const fs::path& png) {
         cementsph::rendering::SliceComparisonOptions options;
-        // Slice through the segmented cement (either one); without any, the default HU threshold decides.
+        // Slice through the segmented cement (either one), every 5 mm as in the paper's Fig. 11.
         double lo = 1e300, hi = -1e300;
         for (vtkPolyData* surface : {ct.surface.Get(), sim ? sim->surface.Get() : nullptr}) {
           if (surface == nullptr) continue;
@@ -295,7 +295,8 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
           lo = std::min(lo, b[4]);
           hi = std::max(hi, b[5]);
         }
-        if (lo <= hi) options.zRangeMm = std::make_pair(lo, hi);
+        // No cement anywhere: one slice through the injection point still shows where it should be.
+        options.zRangeMm = lo <= hi ? std::make_pair(lo, hi) : std::make_pair(injection[2], injection[2]);
         auto simulatedVtk = simulated ? toVtk(simulated.GetPointer()) : nullptr;
         cementsph::rendering::renderSliceComparison(toVtk(registered.GetPointer()), simulatedVtk, png, 5.0,
                                                     options);

@@ -1,0 +1,69 @@
+// `cementsph compare` on Data/compare-example without a display: the Fig. 11 and Fig. 7 pictures appear
+// next to metrics.json, --no-pictures leaves them out, and a picture that cannot be written costs the
+// exit status (3) but not the metrics.
+#include "ProgramRun.h"
+#include "RenderingTestSupport.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using cementsph::rendering::test::forgetDisplay;
+using cementsph::rendering::test::scratchFolder;
+using cementsph::rendering::test::summarisePng;
+using cementsph::testing::runProgram;
+
+namespace {
+
+std::vector<std::string> compareArgs(const fs::path& out) {
+  const fs::path data = fs::path(CEMENTSPH_TEST_DATA_DIR) / "compare-example";
+  return {"compare",
+          "--pre", (data / "pre.nrrd").string(),
+          "--post", (data / "post_dicom").string(),
+          "--simulated", (data / "simulated.nrrd").string(),
+          "--injection-point-mm", "15.805,13.805,14.75",
+          "--out", out.string()};
+}
+
+} // namespace
+
+TEST(ComparePictures, WritesSlicesAndSurfacesHeadless) {
+  forgetDisplay();
+  const fs::path out = scratchFolder() / "out";
+  const auto r = runProgram(CEMENTSPH_EXECUTABLE, compareArgs(out));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "metrics.json"));
+  const auto slices = summarisePng(out / "slices.png");
+  EXPECT_GT(slices.width, 0);
+  EXPECT_GT(slices.nonWhiteFraction, 0.5); // mostly CT pixels
+  const auto surfaces = summarisePng(out / "surfaces.png");
+  EXPECT_EQ(surfaces.width, 1500);
+  EXPECT_EQ(surfaces.height, 560);
+  EXPECT_GT(surfaces.distinctColours, 50u);
+}
+
+TEST(ComparePictures, NoPicturesFlagWritesNone) {
+  forgetDisplay();
+  const fs::path out = scratchFolder() / "out";
+  auto args = compareArgs(out);
+  args.push_back("--no-pictures");
+  const auto r = runProgram(CEMENTSPH_EXECUTABLE, args);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "metrics.json"));
+  EXPECT_FALSE(fs::exists(out / "slices.png"));
+  EXPECT_FALSE(fs::exists(out / "surfaces.png"));
+}
+
+TEST(ComparePictures, FailedPictureKeepsMetricsAndExitsThree) {
+  forgetDisplay();
+  const fs::path out = scratchFolder() / "out";
+  fs::create_directories(out / "slices.png" / "blocker"); // a non-empty folder where the PNG should go
+  const auto r = runProgram(CEMENTSPH_EXECUTABLE, compareArgs(out));
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_TRUE(fs::exists(out / "metrics.json"));
+  EXPECT_NE(r.err.find("picture slices.png not written"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(out / "surfaces.png")); // one failed picture does not stop the other
+}
