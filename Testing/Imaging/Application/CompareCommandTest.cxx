@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
@@ -49,7 +50,8 @@ ProgramRun run(const std::string& args, const fs::path& scratch) {
 class CompareCommand : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
-    dir_ = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "compare-command";
+    // One folder per test process: ctest runs each test in its own process, possibly in parallel (-j).
+    dir_ = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / ("compare-command-" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     CompareCase c;
