@@ -34,7 +34,7 @@ TEST(PhantomCommand, WritesAPairAndTruth) {
   EXPECT_EQ(t["foam"]["seed"].get<int>(), 1);
   EXPECT_EQ(t["misalignment"]["rotation_deg"].size(), 3u);
   EXPECT_EQ(t["injection"]["tip_mm"].size(), 3u);
-  EXPECT_NEAR(t["injection"]["volume_injected_ml"].get<double>(), 0.1, 1e-6);
+  EXPECT_NEAR(t["injection"]["volume_injected_ml"].get<double>(), 0.1, 0.005); // whole particles
   EXPECT_GT(t["injection"]["cement_voxels"].get<int>(), 0);
   const auto pre = cementsph::imaging::readVolume((out / "pre.nrrd").string());
   const auto post = cementsph::imaging::readVolume((out / "post.nrrd").string());
