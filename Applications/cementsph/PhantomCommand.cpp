@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 struct PhantomArgs {
   std::string out;
   std::vector<double> sizeMm;
-  double cellSizeMm = 4.0, strutThicknessMm = 0, porosity = 0.8, shellMm = 5.0, noiseHu = 20.0;
+  double cellSizeMm = 4.0, strutThicknessMm = 0, porosity = 0.8, shellMm = 5.0, airMarginMm = 2.0, noiseHu = 20.0;
   std::uint64_t seed = 1;
   double volumeMl = 1.0, viscosityPaS = 100.0;
   bool noPost = false, postDicom = false, quiet = false;
@@ -45,6 +45,7 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
   sub.add_option("--strut-thickness-mm", a->strutThicknessMm,
                  "Fixed strut band in mm instead of a target porosity (not with --porosity)");
   sub.add_option("--shell-mm", a->shellMm, "Plexiglass shell around the block in mm (default 5; 0: none)");
+  sub.add_option("--air-margin-mm", a->airMarginMm, "Air around the shell in mm (default 2)");
   sub.add_option("--noise-hu", a->noiseHu, "Gaussian CT noise sigma in HU (default 20)");
   sub.add_option("--seed", a->seed, "Random seed (foam; noise; post noise uses seed + 1) (default 1)");
   sub.add_option("--volume-ml", a->volumeMl, "Injected volume in ml (default 1)");
@@ -68,6 +69,7 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
       fo.porosity = a->porosity;
     }
     fo.shellMm = a->shellMm;
+    fo.airMarginMm = a->airMarginMm;
     fo.noiseHu = a->noiseHu;
     fo.seed = a->seed;
     PostOptions po;
@@ -102,6 +104,8 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
     truth["foam"]["cell_size_mm"] = fo.cellSizeMm;
     truth["foam"]["target_porosity"] = fo.porosity ? nlohmann::json(*fo.porosity) : nlohmann::json(nullptr);
     truth["foam"]["shell_mm"] = fo.shellMm;
+    truth["foam"]["air_margin_mm"] = fo.airMarginMm;
+    truth["foam"]["air_hu"] = fo.airHu;
     truth["foam"]["noise_hu"] = fo.noiseHu;
     truth["foam"]["seed"] = fo.seed;
     truth["foam"]["post_noise_seed"] = fo.seed + 1;

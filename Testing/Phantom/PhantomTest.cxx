@@ -17,6 +17,7 @@ FoamOptions smallBlock(double porosity) {
   o.cellSizeMm = 3.0;
   o.porosity = porosity;
   o.shellMm = 0;
+  o.airMarginMm = 0;
   o.noiseHu = 0;
   o.seed = 7;
   return o;

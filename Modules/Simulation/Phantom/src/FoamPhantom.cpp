@@ -122,10 +122,12 @@ void FoamOptions::validate() const {
   if (strutThicknessMm && !(finitePositive(*strutThicknessMm) && *strutThicknessMm < cellSizeMm))
     throw std::invalid_argument("strut_thickness_mm must be in (0, cell_size_mm)");
   if (!(std::isfinite(shellMm) && shellMm >= 0 && shellMm <= 50)) throw std::invalid_argument("shell_mm must be in [0, 50]");
+  if (!(std::isfinite(airMarginMm) && airMarginMm >= 0 && airMarginMm <= 50))
+    throw std::invalid_argument("air_margin_mm must be in [0, 50]");
   if (!(std::isfinite(noiseHu) && noiseHu >= 0 && noiseHu <= 1000)) throw std::invalid_argument("noise_hu must be in [0, 1000]");
   if (supersample < 1 || supersample > 8) throw std::invalid_argument("supersample must be in [1, 8]");
   std::size_t voxels = 1;
-  for (int a = 0; a < 3; ++a) voxels *= static_cast<std::size_t>(std::ceil((sizeMm[a] + 2 * shellMm) / spacingMm[a]));
+  for (int a = 0; a < 3; ++a) voxels *= static_cast<std::size_t>(std::ceil((sizeMm[a] + 2 * shellMm + 2 * airMarginMm) / spacingMm[a]));
   if (voxels > 64'000'000) throw std::invalid_argument("size_mm: the volume would exceed 64 million voxels");
 }
 
@@ -133,7 +135,7 @@ nlohmann::json FoamResult::toJson() const {
   return {{"strut_band_mm", bandMm},
           {"realised_porosity", realisedPorosity},
           {"block_voxels", blockVoxels},
-          {"shell_voxels", shellVoxels},
+          {"non_block_voxels", shellVoxels},
           {"block_min_mm", blockMinMm},
           {"block_max_mm", blockMaxMm}};
 }
@@ -144,7 +146,7 @@ FoamResult makeFoam(const FoamOptions& o) {
   std::array<std::size_t, 3> n{};
   Vec3 origin{};
   for (int a = 0; a < 3; ++a) {
-    const double total = o.sizeMm[a] + 2 * o.shellMm;
+    const double total = o.sizeMm[a] + 2 * o.shellMm + 2 * o.airMarginMm;
     n[a] = std::max<std::size_t>(2, static_cast<std::size_t>(std::llround(total / o.spacingMm[a])));
     origin[a] = 0.5 * o.spacingMm[a]; // voxel (0,0,0) covers [0, spacing)
     const double extent = static_cast<double>(n[a]) * o.spacingMm[a];
@@ -172,7 +174,12 @@ FoamResult makeFoam(const FoamOptions& o) {
                            (static_cast<double>(k) + (c + 0.5) / ss) * o.spacingMm[2]};
               bool inBlock = true;
               for (int x = 0; x < 3; ++x) inBlock = inBlock && p[x] >= r.blockMinMm[x] && p[x] < r.blockMaxMm[x];
-              f[v * perVoxel + s] = inBlock ? static_cast<float>(grid.band(p)) : std::numeric_limits<float>::infinity();
+              bool inShell = true;
+              for (int x = 0; x < 3; ++x)
+                inShell = inShell && p[x] >= r.blockMinMm[x] - o.shellMm && p[x] < r.blockMaxMm[x] + o.shellMm;
+              f[v * perVoxel + s] = inBlock   ? static_cast<float>(grid.band(p))
+                                    : inShell ? std::numeric_limits<float>::infinity()
+                                              : -std::numeric_limits<float>::infinity();
             }
       }
   // The band: given, or the (1 - porosity) quantile of the block's sub-samples.
@@ -193,17 +200,18 @@ FoamResult makeFoam(const FoamOptions& o) {
   float* out = r.clean->GetBufferPointer();
   double strutSum = 0;
   for (std::size_t v = 0; v < count; ++v) {
-    std::size_t strut = 0, shell = 0;
+    std::size_t strut = 0, shell = 0, air = 0;
     for (std::size_t s = 0; s < perVoxel; ++s) {
       const float x = f[v * perVoxel + s];
-      if (!std::isfinite(x)) ++shell;
+      if (x == std::numeric_limits<float>::infinity()) ++shell;
+      else if (x == -std::numeric_limits<float>::infinity()) ++air;
       else if (x < r.bandMm) ++strut;
     }
     const double fs = static_cast<double>(strut) / static_cast<double>(perVoxel);
     const double fsh = static_cast<double>(shell) / static_cast<double>(perVoxel);
-    const double shellHu = o.shellMm > 0 ? o.shellHu : o.fatHu;
-    out[v] = static_cast<float>(o.fatHu * (1.0 - fs - fsh) + o.strutHu * fs + shellHu * fsh);
-    if (shell == 0) {
+    const double fa = static_cast<double>(air) / static_cast<double>(perVoxel);
+    out[v] = static_cast<float>(o.fatHu * (1.0 - fs - fsh - fa) + o.strutHu * fs + o.shellHu * fsh + o.airHu * fa);
+    if (shell + air == 0) {
       ++r.blockVoxels;
       strutSum += fs;
     } else {
@@ -396,7 +404,7 @@ PostResult makePost(const FoamResult& foam, const FoamOptions& fo, const PostOpt
   r.misalignment = po.misalignment;
   for (int a = 0; a < 3; ++a)
     r.misalignment.centreMm[a] = foam.clean->GetOrigin()[a] + 0.5 * static_cast<double>(n[a] - 1) * fo.spacingMm[a];
-  r.ct = misalign(cemented, r.misalignment, -1000.0f);
+  r.ct = misalign(cemented, r.misalignment, static_cast<float>(fo.airHu));
   addNoise(r.ct, fo.noiseHu, fo.seed + 1);
   return r;
 }

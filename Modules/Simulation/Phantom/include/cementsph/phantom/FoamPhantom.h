@@ -7,7 +7,7 @@
 // band. With a target porosity the band is solved exactly: it is the (1 - porosity) quantile of d3 - d1 over
 // the block's sub-samples. Each voxel is the mean of supersample^3 sub-samples (partial volume): HU = fat +
 // f (strut - fat), f the strut fraction; an optional shell (plexiglass) of shell_mm surrounds the block (a
-// sub-sample outside the block is shell). Then Gaussian noise (sigma noise_hu, seeded), HU rounded to
+// sub-sample outside the block is shell), then an air margin (air_margin_mm). Then Gaussian noise (sigma noise_hu, seeded), HU rounded to
 // integers. Physical frame: origin at the first voxel centre, mm, identity direction.
 //
 // Post: an injection (InjectionRunner, scene "paper" with the tip at the block centre, moved to the nearest
@@ -33,10 +33,11 @@ struct FoamOptions {
   std::optional<double> porosity = 0.8;          // target; the band is solved (exclusive with strutThicknessMm)
   std::optional<double> strutThicknessMm;        // fixed band d3 - d1 < t, when no target porosity
   double shellMm = 5.0;                          // 0: no shell
+  double airMarginMm = 2.0;                      // air (airHu) around the shell, so a misaligned scan stays in air
   double noiseHu = 20.0;                         // Gaussian sigma; 0: none
   std::uint64_t seed = 1;
   int supersample = 3;                           // sub-samples per voxel edge
-  double strutHu = 600.0, fatHu = -100.0, shellHu = 120.0;
+  double strutHu = 600.0, fatHu = -100.0, shellHu = 120.0, airHu = -1000.0;
   // Throws std::invalid_argument with one line naming the option.
   void validate() const;
 };
@@ -46,7 +47,7 @@ struct FoamResult {
   imaging::ImageType::Pointer ct;       // with noise (rounded to integer HU)
   double bandMm = 0;                    // the strut band t used
   double realisedPorosity = 0;          // 1 - mean strut fraction over the block's voxels (noise-free)
-  std::size_t blockVoxels = 0, shellVoxels = 0;
+  std::size_t blockVoxels = 0, shellVoxels = 0; // wholly in the block; the others (shell, air)
   std::array<double, 3> blockMinMm{}, blockMaxMm{}; // the block's faces, physical mm
   nlohmann::json toJson() const;        // figures, every key naming its unit
 };
