@@ -73,3 +73,15 @@ TEST(PhantomCommand, BadInputIsOneLineExitOneAndNoOutput) {
     EXPECT_FALSE(fs::exists(out)) << extra[0];
   }
 }
+
+TEST(PhantomCommand, PostDicomHoldsThePostCt) {
+  const fs::path out = scratch("dicom");
+  const auto r = runProgram(CEMENTSPH_EXECUTABLE, {"phantom", "--out", out.string(), "--size-mm", "10", "--volume-ml",
+                                                   "0.05", "--post-dicom", "--quiet", "--threads", "1"});
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto post = cementsph::imaging::readVolume((out / "post.nrrd").string());
+  const auto dicom = cementsph::imaging::readVolume((out / "post_dicom").string());
+  ASSERT_TRUE(cementsph::imaging::geometryOf(post).sameGrid(cementsph::imaging::geometryOf(dicom)));
+  for (std::size_t i = 0; i < post->GetLargestPossibleRegion().GetNumberOfPixels(); ++i)
+    ASSERT_NEAR(post->GetBufferPointer()[i], dicom->GetBufferPointer()[i], 0.5) << i; // integer HU in both
+}
