@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
@@ -32,4 +33,55 @@ TEST(DemoCommand, RunsTheBundledPipelineAndAgreesWithThePhantom) {
   std::ifstream inj(out / "inject" / "metrics.json");
   const auto mi = nlohmann::json::parse(inj);
   EXPECT_EQ(mi.at("escaped_particles").get<int>(), 0);
+  // Issue 4: in the foam phantom the cement stays in pore space (< 1 % of particle centres in solid).
+  // Measured 0.3 % at this 100 Pa.s plan (1.3 % at 400 Pa.s: see VALIDATION.md).
+  EXPECT_LT(mi.at("fluid_in_solid_fraction").get<double>(), 0.01);
+}
+
+namespace {
+nlohmann::json injectOnPhantom(double viscosityPaS) {
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / ("trend-" + std::to_string(int(viscosityPaS)));
+  fs::remove_all(out);
+  fs::create_directories(out.parent_path());
+  const fs::path data = CEMENTSPH_TEST_DATA_DIR;
+  const std::string cmd = std::string(CEMENTSPH_EXECUTABLE) + " inject --ct " + (data / "foam-phantom" / "pre.nrrd").string() +
+                          " --scene " + (data / "scenes" / "paper-1ml.json").string() +
+                          " --tip-mm 22.325,21.855,21.75 --quiet --viscosity-pa-s " + std::to_string(viscosityPaS) +
+                          " --out " + out.string() + " > " + out.string() + ".log 2>&1";
+  const int status = std::system(cmd.c_str());
+  if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) return nullptr;
+  std::ifstream in(out / "metrics.json");
+  return nlohmann::json::parse(in);
+}
+} // namespace
+
+TEST(PhantomTrend, SpreadingFallsAndPressureRisesFrom50To400PaS) {
+  // The paper's trend (Figs. 8-10): more viscous cement spreads less and needs more pressure. Same
+  // phantom, tip, rate (0.05 ml/s) and volume (1 ml). Measured: 6.23 -> 4.95 mm, 3.9 -> 5.1 kPa.
+  const nlohmann::json thin = injectOnPhantom(50.0), thick = injectOnPhantom(400.0);
+  ASSERT_FALSE(thin.is_null());
+  ASSERT_FALSE(thick.is_null());
+  EXPECT_LT(thick.at("mean_spreading_distance_mm").get<double>(), thin.at("mean_spreading_distance_mm").get<double>());
+  EXPECT_GT(thick.at("max_tip_pressure_pa").get<double>(), thin.at("max_tip_pressure_pa").get<double>());
+}
+
+TEST(ViscosityCommand, Eq13BothWays) {
+  // model-notes 4: 11G, 9 cm, 0.05 ml/s, 100 Pa.s -> 0.56 MPa; the inverse gives the viscosity back.
+  const fs::path log = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "viscosity.log";
+  fs::create_directories(log.parent_path());
+  auto run = [&](const std::string& args) {
+    const int status = std::system((std::string(CEMENTSPH_EXECUTABLE) + " viscosity " + args + " > " + log.string() + " 2>&1").c_str());
+    std::ifstream in(log);
+    std::string key;
+    double value = -1;
+    in >> key >> value;
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, value);
+  };
+  const auto drop = run("--viscosity-pa-s 100");
+  ASSERT_EQ(drop.first, 0);
+  EXPECT_NEAR(drop.second, 0.5638, 0.001);
+  const auto mu = run("--pressure-drop-mpa " + std::to_string(drop.second));
+  ASSERT_EQ(mu.first, 0);
+  EXPECT_NEAR(mu.second, 100.0, 0.05);
+  EXPECT_NE(run("--viscosity-pa-s 100 --pressure-drop-mpa 1").first, 0); // both: a clear error
 }
