@@ -69,6 +69,10 @@ void writeWindowPng(vtkRenderWindow* window, const std::filesystem::path& png) {
                              std::to_string(size[1]) + " px window");
   }
 
+  writeImagePng(image, png);
+}
+
+void writeImagePng(vtkImageData* image, const std::filesystem::path& png) {
   // Write next to the target and rename: readers never see a half-written PNG, and a failure leaves none.
   const std::filesystem::path tmp = temporarySibling(png);
   auto writer = vtkSmartPointer<vtkPNGWriter>::New();

@@ -2,21 +2,18 @@
 // HU window) instead of going through vtkImageReslice + a render window: no GL means the same bytes on
 // every machine, so the test can compare exactly, and the picture needs no display at all.
 #include "cementsph/rendering/SliceComparison.h"
+#include "cementsph/rendering/OffScreenWindow.h"
 
 #include <vtkImageData.h>
-#include <vtkPNGWriter.h>
 #include <vtkPointData.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <system_error>
-#include <unistd.h>
 
 namespace cementsph::rendering {
 
@@ -51,34 +48,12 @@ void thresholdZRange(vtkImageData* v, double threshold, double& lo, double& hi) 
   }
 }
 
-std::filesystem::path temporarySibling(const std::filesystem::path& target) {
-  static std::atomic<unsigned> counter{0};
-  std::filesystem::path tmp = target.parent_path();
-  tmp /= "." + target.filename().string() + ".tmp" + std::to_string(getpid()) + "-" + std::to_string(counter++);
-  return tmp;
-}
-
 void writePngAtomically(vtkImageData* image, const std::filesystem::path& png) {
   if (png.filename().empty()) throw std::invalid_argument("renderSliceComparison: '" + png.string() + "' names no file");
   const std::filesystem::path folder = png.parent_path().empty() ? "." : png.parent_path();
   if (!std::filesystem::is_directory(folder))
     throw std::runtime_error("cannot write " + png.string() + ": folder " + folder.string() + " does not exist");
-  const auto tmp = temporarySibling(png);
-  auto writer = vtkSmartPointer<vtkPNGWriter>::New();
-  writer->SetFileName(tmp.string().c_str());
-  writer->SetInputData(image);
-  writer->Write();
-  std::error_code ec;
-  if (writer->GetErrorCode() != 0) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error("cementsph rendering: could not write " + png.string());
-  }
-  std::filesystem::rename(tmp, png, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error("cementsph rendering: could not move the image into " + png.string() + ": " + ec.message());
-  }
+  writeImagePng(image, png); // atomic: temporary sibling, then rename
 }
 
 } // namespace

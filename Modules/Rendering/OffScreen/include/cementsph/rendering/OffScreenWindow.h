@@ -20,4 +20,7 @@ vtkSmartPointer<vtkRenderWindow> makeOffScreenRenderWindow(int widthPx, int heig
 // Throws std::runtime_error if the captured image is not the window's size or the file cannot be written.
 void writeWindowPng(vtkRenderWindow* window, const std::filesystem::path& png);
 
+// Writes an image (e.g. one composed without GL) to `png` the same atomic way.
+void writeImagePng(vtkImageData* image, const std::filesystem::path& png);
+
 } // namespace cementsph::rendering
