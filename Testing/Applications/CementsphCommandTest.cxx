@@ -1,15 +1,14 @@
 // The cementsph program as a user meets it: help, bad input (one clear line, non-zero exit, no output
 // files), and a small real `darcy` run whose CSV has the documented columns.
+#include "ProgramRun.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 
@@ -21,14 +20,8 @@ struct Result {
 };
 
 Result run(const std::string& args) {
-  const std::string command = std::string(CEMENTSPH_EXECUTABLE) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
-  const int raw = pclose(pipe);
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, out};
+  const cementsph::testing::ProgramRun r = cementsph::testing::runProgram(CEMENTSPH_EXECUTABLE, args);
+  return {r.exitCode, r.out + r.err};
 }
 
 fs::path scratch(const std::string& name) {

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iterator>
 #include <random>
+#include <sstream>
 #include <sys/wait.h>
 
 namespace cementsph::testing {
@@ -44,6 +45,12 @@ ProgramRun runProgram(const std::string& program, const std::vector<std::string>
   run.out = readAndRemove(outPath);
   run.err = readAndRemove(errPath);
   return run;
+}
+
+ProgramRun runProgram(const std::string& program, const std::string& argumentLine) {
+  std::istringstream words(argumentLine);
+  std::vector<std::string> args{std::istream_iterator<std::string>(words), std::istream_iterator<std::string>()};
+  return runProgram(program, args);
 }
 
 } // namespace cementsph::testing

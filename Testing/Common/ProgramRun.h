@@ -14,4 +14,7 @@ struct ProgramRun {
 
 ProgramRun runProgram(const std::string& program, const std::vector<std::string>& args);
 
+// The same with the arguments as one line, split at white space (for arguments without spaces).
+ProgramRun runProgram(const std::string& program, const std::string& argumentLine);
+
 } // namespace cementsph::testing

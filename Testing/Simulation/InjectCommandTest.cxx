@@ -1,5 +1,6 @@
 // `cementsph inject` as a user meets it: a real run on a scaffold CT written as NRRD (files, metrics, the
 // command-line override), and bad input (one line on stderr, exit 1, no output folder).
+#include "ProgramRun.h"
 #include "ScaffoldCT.h"
 
 #include "cementsph/imaging/VolumeIO.h"
@@ -7,28 +8,22 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 
 namespace {
 struct Result {
   int status;
-  std::string output;
+  std::string output; // stdout and stderr together
 };
+
 Result run(const std::string& args) {
-  const std::string command = "OMP_NUM_THREADS=1 " + std::string(CEMENTSPH_EXECUTABLE) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
-  const int raw = pclose(pipe);
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, out};
+  setenv("OMP_NUM_THREADS", "1", 1); // the child inherits it: one thread on shared cores
+  const cementsph::testing::ProgramRun r = cementsph::testing::runProgram(CEMENTSPH_EXECUTABLE, args);
+  return {r.exitCode, r.out + r.err};
 }
 fs::path scratch(const std::string& name) {
   const fs::path p = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / name;
