@@ -22,6 +22,16 @@ std::string toString(Integrator integrator) {
   return "?";
 }
 
+std::string toString(FixedSumMethod method) {
+  return method == FixedSumMethod::Exact ? "exact" : "tabulated";
+}
+
+FixedSumMethod parseFixedSumMethod(const std::string& name) {
+  if (name == "exact") return FixedSumMethod::Exact;
+  if (name == "tabulated") return FixedSumMethod::Tabulated;
+  throw std::invalid_argument("unknown fixed-particle sum method '" + name + "' (expected exact or tabulated)");
+}
+
 ViscosityModel parseViscosityModel(const std::string& name) {
   if (name == "none") return ViscosityModel::None;
   if (name == "drag") return ViscosityModel::Drag;

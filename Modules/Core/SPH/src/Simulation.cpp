@@ -36,6 +36,9 @@ Simulation::Simulation(const ModelParameters& parameters, const Domain& domain)
   }
   fixed_.density = parameters_.restDensity;
   fixed_.pressure = parameters_.pressure(fixed_.density);
+  tabulated_ = parameters_.fixedSums == FixedSumMethod::Tabulated;
+  if (tabulated_)
+    field_.configure(domain_, parameters_.fixedFieldSpacing * parameters_.smoothingLength, parameters_.smoothingLength);
 }
 
 void Simulation::validateParameters() const {
@@ -59,6 +62,13 @@ void Simulation::validateParameters() const {
     require(p.viscosityModel != ViscosityModel::Morris,
             "the central-difference integrator (Eq. 8) is implicit in the drag only; Morris viscosity (Eq. 7) "
             "needs the explicit integrator");
+  if (p.fixedSums == FixedSumMethod::Tabulated) {
+    require(p.viscosityModel != ViscosityModel::Morris,
+            "tabulated fixed-particle sums cover density and pressure only: use exact sums with Morris viscosity");
+    require(!domain_.periodic[0] && !domain_.periodic[1] && !domain_.periodic[2],
+            "tabulated fixed-particle sums need an open box: use exact sums with periodic sides");
+    require(p.fixedFieldSpacing > 0 && p.fixedFieldSpacing <= 1, "fixed field spacing must be within 0..1 h");
+  }
   if (p.fixedTimeStep) require(std::isfinite(*p.fixedTimeStep) && *p.fixedTimeStep > 0, "time step must be positive");
   if (p.maxTimeStep) require(std::isfinite(*p.maxTimeStep) && *p.maxTimeStep > 0, "maximum time step must be positive");
   const double listRadius = 2.0 * p.smoothingLength * (1.0 + 0.5 * p.neighbourSkin);
@@ -87,7 +97,13 @@ std::uint64_t Simulation::addFluidParticle(const Eigen::Vector3d& position, cons
     fluid_.yp[i] = position.y() - velocity.y() * centralDifferenceStep_;
     fluid_.zp[i] = position.z() - velocity.z() * centralDifferenceStep_;
   }
-  listsValid_ = false;
+  // A newcomer joins the valid lists unless too many have queued since the last rebuild (the pairs of
+  // newcomers are summed serially).
+  const std::size_t newcomerLimit = std::max<std::size_t>(64, listed_ / 8);
+  if (listsValid_ && parameters_.insertWithoutRebuild && i == refX_.size() && i - listed_ < newcomerLimit)
+    addNewcomerLists(i);
+  else
+    listsValid_ = false;
   return nextId_++;
 }
 
@@ -146,6 +162,7 @@ void Simulation::rebuildNeighbourLists() {
     fixed_.mass.swap(sm);
     fixed_.x.shrink_to_fit(); fixed_.y.shrink_to_fit(); fixed_.z.shrink_to_fit(); fixed_.mass.shrink_to_fit();
     fixedBinned_ = true;
+    if (tabulated_) field_.attach(&fixed_, &grid_, &fixedCellStart_);
   }
   // Fluid particles are reordered by cell so that neighbours are close in memory.
   grid_.bin(fluid_.x.data(), fluid_.y.data(), fluid_.z.data(), fluid_.size(), order, fluidCellStart_);
@@ -155,6 +172,11 @@ void Simulation::rebuildNeighbourLists() {
   refX_ = fluid_.x;
   refY_ = fluid_.y;
   refZ_ = fluid_.z;
+  listed_ = fluid_.size();
+  newFluid_.offset.assign(1, 0);
+  newFluid_.index.clear();
+  newFixed_.offset.assign(1, 0);
+  newFixed_.index.clear();
   listsValid_ = true;
   ++statistics_.neighbourRebuilds;
 }
@@ -181,32 +203,85 @@ template <bool Periodic> void Simulation::buildLists() {
     for (const std::uint32_t* c = grid_.neighbourCellsBegin(cell); c != grid_.neighbourCellsEnd(cell); ++c) {
       for (std::uint32_t j = fluidCellStart_[*c]; j < fluidCellStart_[*c + 1]; ++j)
         if (j != i && within(X[i], Y[i], Z[i], X[j], Y[j], Z[j])) onFluid(j);
-      if (!fixedCellStart_.empty())
+      if (!fixedCellStart_.empty() && !tabulated_) // tabulated: the field holds the fixed sums
         for (std::uint32_t j = fixedCellStart_[*c]; j < fixedCellStart_[*c + 1]; ++j)
           if (within(X[i], Y[i], Z[i], FX[j], FY[j], FZ[j])) onFixed(j);
     }
   };
-  fluidNeighbours_.offset.assign(n + 1, 0);
-  fixedNeighbours_.offset.assign(n + 1, 0);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint64_t nf = 0, ns = 0;
-    visit(i, [&](std::uint32_t) { ++nf; }, [&](std::uint32_t) { ++ns; });
-    fluidNeighbours_.offset[i + 1] = nf;
-    fixedNeighbours_.offset[i + 1] = ns;
+  // One pass: each thread lists a contiguous block of particles into its own buffers (offsets local to
+  // the block), then the blocks are placed one after another. Deterministic, lock-free.
+  fluidNeighbours_.offset.resize(n + 1);
+  fixedNeighbours_.offset.resize(n + 1);
+  fluidNeighbours_.offset[0] = fixedNeighbours_.offset[0] = 0;
+  const int threads = omp_get_max_threads();
+  listScratch_.resize(2 * static_cast<std::size_t>(threads));
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+    const std::size_t begin = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
+    const std::size_t end = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
+    std::vector<std::uint32_t>& lf = listScratch_[2 * static_cast<std::size_t>(t)];
+    std::vector<std::uint32_t>& ls = listScratch_[2 * static_cast<std::size_t>(t) + 1];
+    lf.clear();
+    ls.clear();
+    for (std::size_t i = begin; i < end; ++i) {
+      visit(i, [&](std::uint32_t j) { lf.push_back(j); }, [&](std::uint32_t j) { ls.push_back(j); });
+      fluidNeighbours_.offset[i + 1] = lf.size();
+      fixedNeighbours_.offset[i + 1] = ls.size();
+    }
+#pragma omp barrier
+#pragma omp single
+    {
+      // Make the block-local offsets global, block after block.
+      std::uint64_t baseF = 0, baseS = 0;
+      for (int b = 0; b < nt; ++b) {
+        const std::size_t from = n * static_cast<std::size_t>(b) / static_cast<std::size_t>(nt);
+        const std::size_t to = n * static_cast<std::size_t>(b + 1) / static_cast<std::size_t>(nt);
+        for (std::size_t i = from; i < to; ++i) {
+          fluidNeighbours_.offset[i + 1] += baseF;
+          fixedNeighbours_.offset[i + 1] += baseS;
+        }
+        baseF += listScratch_[2 * static_cast<std::size_t>(b)].size();
+        baseS += listScratch_[2 * static_cast<std::size_t>(b) + 1].size();
+      }
+      fluidNeighbours_.index.resize(baseF);
+      fixedNeighbours_.index.resize(baseS);
+    }
+    if (end > begin) {
+      std::copy(lf.begin(), lf.end(), fluidNeighbours_.index.begin() + static_cast<std::ptrdiff_t>(fluidNeighbours_.offset[begin]));
+      std::copy(ls.begin(), ls.end(), fixedNeighbours_.index.begin() + static_cast<std::ptrdiff_t>(fixedNeighbours_.offset[begin]));
+    }
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    fluidNeighbours_.offset[i + 1] += fluidNeighbours_.offset[i];
-    fixedNeighbours_.offset[i + 1] += fixedNeighbours_.offset[i];
+}
+
+void Simulation::addNewcomerLists(std::size_t i) {
+  // The Verlet guarantee holds if every pair is judged at the reference positions with the list radius
+  // (each particle then stays within half the skin of its reference until the next rebuild), so the
+  // newcomer is compared with the others' references, not their current positions.
+  refX_.push_back(fluid_.x[i]);
+  refY_.push_back(fluid_.y[i]);
+  refZ_.push_back(fluid_.z[i]);
+  const double radius = densityKernel_.support() + parameters_.neighbourSkin * parameters_.smoothingLength;
+  const double r2max = radius * radius;
+  const double xi = refX_[i], yi = refY_[i], zi = refZ_[i];
+  auto dist2 = [&](double dx, double dy, double dz) {
+    if (anyPeriodic_) {
+      if (dx > halfExtent_[0]) dx -= extent_[0]; else if (dx < -halfExtent_[0]) dx += extent_[0];
+      if (dy > halfExtent_[1]) dy -= extent_[1]; else if (dy < -halfExtent_[1]) dy += extent_[1];
+      if (dz > halfExtent_[2]) dz -= extent_[2]; else if (dz < -halfExtent_[2]) dz += extent_[2];
+    }
+    return dx * dx + dy * dy + dz * dz;
+  };
+  for (std::size_t j = 0; j < i; ++j)
+    if (dist2(xi - refX_[j], yi - refY_[j], zi - refZ_[j]) < r2max) newFluid_.index.push_back(static_cast<std::uint32_t>(j));
+  newFluid_.offset.push_back(newFluid_.index.size());
+  if (!tabulated_ && !fixedCellStart_.empty()) {
+    const int cell = grid_.cellOf(xi, yi, zi);
+    for (const std::uint32_t* c = grid_.neighbourCellsBegin(cell); c != grid_.neighbourCellsEnd(cell); ++c)
+      for (std::uint32_t j = fixedCellStart_[*c]; j < fixedCellStart_[*c + 1]; ++j)
+        if (dist2(xi - fixed_.x[j], yi - fixed_.y[j], zi - fixed_.z[j]) < r2max) newFixed_.index.push_back(j);
   }
-  fluidNeighbours_.index.resize(fluidNeighbours_.offset[n]);
-  fixedNeighbours_.index.resize(fixedNeighbours_.offset[n]);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    std::uint64_t pf = fluidNeighbours_.offset[i], ps = fixedNeighbours_.offset[i];
-    visit(i, [&](std::uint32_t j) { fluidNeighbours_.index[pf++] = j; },
-          [&](std::uint32_t j) { fixedNeighbours_.index[ps++] = j; });
-  }
+  newFixed_.offset.push_back(newFixed_.index.size());
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -235,10 +310,36 @@ template <bool Periodic> void Simulation::densityPass() {
   const double* M = fluid_.mass.data();
   const double* FX = fixed_.x.data(); const double* FY = fixed_.y.data(); const double* FZ = fixed_.z.data();
   const float* FM = fixed_.mass.data();
+  double* RHO = fluid_.density.data();
+  double* P = fluid_.pressure.data();
+  if (tabulated_) {
+    field_.prepare(X, Y, Z, n);
+    fixedGradX_.resize(n); fixedGradY_.resize(n); fixedGradZ_.resize(n);
+  }
+  // The fixed particles' share at particle i: the table (which also gives grad Phi for the force pass),
+  // or the pair sum over i's fixed list [begin, end).
+  auto fixedDensity = [&](std::size_t i, const std::uint32_t* list, std::uint64_t begin, std::uint64_t end) {
+    if (tabulated_) {
+      double d, g[3];
+      field_.sample(X[i], Y[i], Z[i], d, g);
+      fixedGradX_[i] = g[0]; fixedGradY_[i] = g[1]; fixedGradZ_[i] = g[2];
+      return d;
+    }
+    double rho = 0.0;
+    for (std::uint64_t k = begin; k < end; ++k) {
+      const std::uint32_t j = list[k];
+      double dx = X[i] - FX[j], dy = Y[i] - FY[j], dz = Z[i] - FZ[j];
+      CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      if (r2 < support2) rho += static_cast<double>(FM[j]) * densityKernel_.value(std::sqrt(r2));
+    }
+    return rho;
+  };
   const std::uint32_t* fl = fluidNeighbours_.index.data();
   const std::uint32_t* sl = fixedNeighbours_.index.data();
+  const std::size_t listed = listed_;
 #pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < listed; ++i) {
     const double xi = X[i], yi = Y[i], zi = Z[i];
     double rho = M[i] * w0; // the particle itself
     for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
@@ -248,15 +349,27 @@ template <bool Periodic> void Simulation::densityPass() {
       const double r2 = dx * dx + dy * dy + dz * dz;
       if (r2 < support2) rho += M[j] * densityKernel_.value(std::sqrt(r2));
     }
-    for (std::uint64_t k = fixedNeighbours_.offset[i]; k < fixedNeighbours_.offset[i + 1]; ++k) {
-      const std::uint32_t j = sl[k];
-      double dx = xi - FX[j], dy = yi - FY[j], dz = zi - FZ[j];
+    rho += fixedDensity(i, sl, fixedNeighbours_.offset[i], fixedNeighbours_.offset[i + 1]);
+    RHO[i] = rho;
+    P[i] = cs2 * (rho - rho0);
+  }
+  // Newcomers since the last rebuild, in order: each pair (i, j < i) adds to both.
+  for (std::size_t i = listed; i < n; ++i) {
+    const std::size_t q = i - listed;
+    double rho = M[i] * w0 + fixedDensity(i, newFixed_.index.data(), newFixed_.offset[q], newFixed_.offset[q + 1]);
+    for (std::uint64_t k = newFluid_.offset[q]; k < newFluid_.offset[q + 1]; ++k) {
+      const std::uint32_t j = newFluid_.index[k];
+      double dx = X[i] - X[j], dy = Y[i] - Y[j], dz = Z[i] - Z[j];
       CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
       const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 < support2) rho += static_cast<double>(FM[j]) * densityKernel_.value(std::sqrt(r2));
+      if (r2 >= support2) continue;
+      const double w = densityKernel_.value(std::sqrt(r2));
+      rho += M[j] * w;
+      RHO[j] += M[i] * w;
+      P[j] = cs2 * (RHO[j] - rho0);
     }
-    fluid_.density[i] = rho;
-    fluid_.pressure[i] = cs2 * (rho - rho0);
+    RHO[i] = rho;
+    P[i] = cs2 * (rho - rho0);
   }
 }
 
@@ -288,40 +401,45 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
   const double* M = fluid_.mass.data(); const double* RHO = fluid_.density.data();
   const double* FX = fixed_.x.data(); const double* FY = fixed_.y.data(); const double* FZ = fixed_.z.data();
   const float* FM = fixed_.mass.data();
-  const std::uint32_t* fl = fluidNeighbours_.index.data();
-  const std::uint32_t* sl = fixedNeighbours_.index.data();
+  double* AX = fluid_.ax.data(); double* AY = fluid_.ay.data(); double* AZ = fluid_.az.data();
   const double fixedRho = fixed_.density;
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double xi = X[i], yi = Y[i], zi = Z[i];
-    const double pi = pr2[i];
-    double ax = g.x(), ay = g.y(), az = g.z();
-    [[maybe_unused]] double vxi = 0, vyi = 0, vzi = 0, rhoi = 0;
-    if constexpr (Morris) { vxi = VX[i]; vyi = VY[i]; vzi = VZ[i]; rhoi = RHO[i]; }
-    for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
-      const std::uint32_t j = fl[k];
-      double dx = xi - X[j], dy = yi - Y[j], dz = zi - Z[j];
-      CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 >= support2) continue;
-      const double r = std::sqrt(r2);
-      double ux, uy, uz;
-      if (r > 1e-12 * h) { ux = dx / r; uy = dy / r; uz = dz / r; }
-      else { // coincident pair: the spiky gradient is finite, its direction is not; split them
-        ux = (i < j) ? 1.0 : -1.0; uy = 0.0; uz = 0.0; // along x, antisymmetric: momentum conserved
-      }
-      // Eq. 5: a_i -= m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W_spiky
-      const double f = -M[j] * (pi + pr2[j]) * pressureKernel_.derivative(r);
-      ax += f * ux; ay += f * uy; az += f * uz;
-      if constexpr (Morris) {
-        // Eq. 7: m_j (mu_i + mu_j) / (rho_i rho_j) (r_ij . grad W) / (r_ij^2 + 0.01 h^2) (v_i - v_j)
-        const double v = M[j] * twoMu / (rhoi * RHO[j]) * (r * densityKernel_.derivative(r)) / (r2 + eta2);
-        ax += v * (vxi - VX[j]); ay += v * (vyi - VY[j]); az += v * (vzi - VZ[j]);
-      }
+
+  // Eq. 5 (and Eq. 7) for the pair (i, j): the acceleration of i is +(fx, fy, fz) M[j], that of j is
+  // -(fx, fy, fz) M[i] (antisymmetric: momentum is conserved pair by pair).
+  auto pairForce = [&](std::size_t i, std::size_t j, double& fx, double& fy, double& fz) {
+    double dx = X[i] - X[j], dy = Y[i] - Y[j], dz = Z[i] - Z[j];
+    CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
+    const double r2 = dx * dx + dy * dy + dz * dz;
+    fx = fy = fz = 0.0;
+    if (r2 >= support2) return;
+    const double r = std::sqrt(r2);
+    double ux, uy, uz;
+    if (r > 1e-12 * h) { ux = dx / r; uy = dy / r; uz = dz / r; }
+    else { // coincident pair: the spiky gradient is finite, its direction is not; split them
+      ux = (i < j) ? 1.0 : -1.0; uy = 0.0; uz = 0.0; // along x, antisymmetric: momentum conserved
     }
-    for (std::uint64_t k = fixedNeighbours_.offset[i]; k < fixedNeighbours_.offset[i + 1]; ++k) {
-      const std::uint32_t j = sl[k];
-      double dx = xi - FX[j], dy = yi - FY[j], dz = zi - FZ[j];
+    // Eq. 5: a_i -= m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W_spiky
+    const double f = -(pr2[i] + pr2[j]) * pressureKernel_.derivative(r);
+    fx = f * ux; fy = f * uy; fz = f * uz;
+    if constexpr (Morris) {
+      // Eq. 7: m_j (mu_i + mu_j) / (rho_i rho_j) (r_ij . grad W) / (r_ij^2 + 0.01 h^2) (v_i - v_j)
+      const double v = twoMu / (RHO[i] * RHO[j]) * (r * densityKernel_.derivative(r)) / (r2 + eta2);
+      fx += v * (VX[i] - VX[j]); fy += v * (VY[i] - VY[j]); fz += v * (VZ[i] - VZ[j]);
+    }
+  };
+  // The fixed particles' share at particle i: the gradient of the tabulated potential, or the pairs of
+  // i's fixed list [begin, end).
+  auto fixedForce = [&](std::size_t i, const std::uint32_t* list, std::uint64_t begin, std::uint64_t end,
+                        double& ax, double& ay, double& az) {
+    const double pi = pr2[i];
+    if (tabulated_) {
+      const double c = -(pi + fixedPr2);
+      ax += c * fixedGradX_[i]; ay += c * fixedGradY_[i]; az += c * fixedGradZ_[i];
+      return;
+    }
+    for (std::uint64_t k = begin; k < end; ++k) {
+      const std::uint32_t j = list[k];
+      double dx = X[i] - FX[j], dy = Y[i] - FY[j], dz = Z[i] - FZ[j];
       CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
       const double r2 = dx * dx + dy * dy + dz * dz;
       if (r2 >= support2) continue;
@@ -332,11 +450,39 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
       const double f = -mj * (pi + fixedPr2) * pressureKernel_.derivative(r);
       ax += f * ux; ay += f * uy; az += f * uz;
       if constexpr (Morris) { // fixed particles have zero velocity: the no-slip condition
-        const double v = mj * twoMu / (rhoi * fixedRho) * (r * densityKernel_.derivative(r)) / (r2 + eta2);
-        ax += v * vxi; ay += v * vyi; az += v * vzi;
+        const double v = mj * twoMu / (RHO[i] * fixedRho) * (r * densityKernel_.derivative(r)) / (r2 + eta2);
+        ax += v * VX[i]; ay += v * VY[i]; az += v * VZ[i];
       }
     }
-    fluid_.ax[i] = ax; fluid_.ay[i] = ay; fluid_.az[i] = az;
+  };
+  const std::uint32_t* fl = fluidNeighbours_.index.data();
+  const std::uint32_t* sl = fixedNeighbours_.index.data();
+  const std::size_t listed = listed_;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < listed; ++i) {
+    double ax = g.x(), ay = g.y(), az = g.z();
+    for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
+      const std::uint32_t j = fl[k];
+      double fx, fy, fz;
+      pairForce(i, j, fx, fy, fz);
+      ax += M[j] * fx; ay += M[j] * fy; az += M[j] * fz;
+    }
+    fixedForce(i, sl, fixedNeighbours_.offset[i], fixedNeighbours_.offset[i + 1], ax, ay, az);
+    AX[i] = ax; AY[i] = ay; AZ[i] = az;
+  }
+  // Newcomers since the last rebuild, in order: each pair (i, j < i) acts on both.
+  for (std::size_t i = listed; i < n; ++i) {
+    const std::size_t q = i - listed;
+    double ax = g.x(), ay = g.y(), az = g.z();
+    for (std::uint64_t k = newFluid_.offset[q]; k < newFluid_.offset[q + 1]; ++k) {
+      const std::uint32_t j = newFluid_.index[k];
+      double fx, fy, fz;
+      pairForce(i, j, fx, fy, fz);
+      ax += M[j] * fx; ay += M[j] * fy; az += M[j] * fz;
+      AX[j] -= M[i] * fx; AY[j] -= M[i] * fy; AZ[j] -= M[i] * fz;
+    }
+    fixedForce(i, newFixed_.index.data(), newFixed_.offset[q], newFixed_.offset[q + 1], ax, ay, az);
+    AX[i] = ax; AY[i] = ay; AZ[i] = az;
   }
 }
 #undef CEMENTSPH_MINIMUM_IMAGE

@@ -85,6 +85,10 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   if (scene.integrator) m.integrator = sph::parseIntegrator(*scene.integrator);
   if (scene.dragCoefficient) m.dragCoefficient = *scene.dragCoefficient;
   if (scene.soundSpeedMPerS) m.soundSpeed = *scene.soundSpeedMPerS;
+  m.fixedSums = scene.fixedSumMethod();
+  if (scene.fixedFieldSpacingOverH) m.fixedFieldSpacing = *scene.fixedFieldSpacingOverH;
+  if (scene.maxDisplacementOverH) m.maxDisplacement = *scene.maxDisplacementOverH;
+  if (scene.neighbourSkinOverH) m.neighbourSkin = *scene.neighbourSkinOverH;
   const double d = scene.spacingM();
   m.smoothingLength = preset.hOverD * d;
   const double rho0 = m.restDensity;
@@ -253,6 +257,9 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   metrics["wall_time_s"] = wallS;
   metrics["real_time_factor"] = wallS > 0 ? sim.time() / wallS : 0.0; // simulated seconds per wall second
   metrics["integrator"] = sph::toString(m.integrator);
+  metrics["fixed_particle_sums"] = sph::toString(m.fixedSums);
+  metrics["fixed_field_bricks"] = sim.fixedField().bricksFilled();
+  metrics["neighbour_rebuilds"] = st.neighbourRebuilds;
   metrics["model_preset"] = preset.name;
   metrics["smoothing_length_mm"] = m.smoothingLength * 1e3;
   metrics["final_tip_pressure_pa"] = finiteOrZero(finalPressure);

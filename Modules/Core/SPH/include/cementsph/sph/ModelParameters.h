@@ -23,6 +23,12 @@ enum class Integrator {
   Overdamped,        // creeping-flow limit of the drag model: v = a_other / gamma (model-notes 3)
 };
 
+// How the fixed particles' share of Eq. 2 and Eq. 5 is summed (FixedParticleField.h).
+enum class FixedSumMethod {
+  Exact,     // pair by pair, as the paper (every fixed particle within the support, every step)
+  Tabulated, // summed once on a grid and interpolated (ours: open boxes, drag model only)
+};
+
 // What to do when a user-fixed time step exceeds the scheme's stability limit.
 enum class StepLimitPolicy { Refuse, Clamp };
 
@@ -50,6 +56,13 @@ struct ModelParameters {
 
   // --- neighbour search -----------------------------------------------------------------------
   double neighbourSkin = 0.2;      // Verlet skin as a fraction of h; 0 rebuilds lists every step
+  // A particle added while the lists are valid gets its own list and joins its neighbours' sums
+  // pairwise, instead of a rebuild of all lists (the injection adds one every few steps).
+  bool insertWithoutRebuild = true;
+
+  // --- fixed particles ------------------------------------------------------------------------
+  FixedSumMethod fixedSums = FixedSumMethod::Exact;
+  double fixedFieldSpacing = 1.0 / 3.0; // Tabulated: node spacing as a fraction of h
 
   // --- safety ---------------------------------------------------------------------------------
   double runawaySpeedFactor = 10.0; // a particle faster than this many cs means the run went unstable
@@ -64,7 +77,9 @@ struct ModelParameters {
 
 std::string toString(ViscosityModel model);
 std::string toString(Integrator integrator);
+std::string toString(FixedSumMethod method);
 ViscosityModel parseViscosityModel(const std::string& name);
 Integrator parseIntegrator(const std::string& name);
+FixedSumMethod parseFixedSumMethod(const std::string& name);
 
 } // namespace cementsph::sph

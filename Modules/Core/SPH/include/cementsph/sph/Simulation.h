@@ -12,6 +12,7 @@
 #pragma once
 
 #include "cementsph/sph/Domain.h"
+#include "cementsph/sph/FixedParticleField.h"
 #include "cementsph/sph/Kernels.h"
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/NeighbourSearch.h"
@@ -50,6 +51,8 @@ struct StepStatistics {
 class Simulation {
 public:
   Simulation(const ModelParameters& parameters, const Domain& domain);
+  Simulation(const Simulation&) = delete; // the fixed field points into this object
+  Simulation& operator=(const Simulation&) = delete;
 
   // --- set-up ------------------------------------------------------------------------------------
   std::uint64_t addFluidParticle(const Eigen::Vector3d& position, const Eigen::Vector3d& velocity, double mass);
@@ -80,7 +83,11 @@ public:
   StepLimits currentLimits() const;
   // The step the next call to step() will take, given the current state.
   double nextTimeStep() const;
-  std::size_t neighbourPairCount() const { return fluidNeighbours_.size() + fixedNeighbours_.size(); }
+  std::size_t neighbourPairCount() const {
+    return fluidNeighbours_.size() + fixedNeighbours_.size() + newFluid_.size() + newFixed_.size();
+  }
+  // The tabulated fixed-particle sums (FixedSumMethod::Tabulated), for tests and reports.
+  const FixedParticleField& fixedField() const { return field_; }
   std::size_t bytesPerFixedParticle() const;
   // Messages about the run that are not errors (e.g. a user's time step clamped to a limit).
   const std::vector<std::string>& warnings() const { return warnings_; }
@@ -90,6 +97,7 @@ private:
   bool listsNeedRebuild() const;
   void rebuildNeighbourLists();
   template <bool Periodic> void buildLists();
+  void addNewcomerLists(std::size_t i);
   template <bool Periodic> void densityPass();
   template <bool Periodic, bool Morris> void forcePass();
   double chooseTimeStep(const StepLimits& limits);
@@ -114,6 +122,14 @@ private:
   bool fixedBinned_ = false;
   NeighbourList fluidNeighbours_, fixedNeighbours_;
   bool listsValid_ = false;
+  // Particles [0, listed_) have the lists above; later ones were added since the last rebuild and have
+  // their own lists: fluid neighbours j < i only (each such pair is applied to both), and fixed ones.
+  std::size_t listed_ = 0;
+  NeighbourList newFluid_, newFixed_;
+  std::vector<std::vector<std::uint32_t>> listScratch_; // per-thread list buffers of buildLists
+  bool tabulated_ = false;
+  FixedParticleField field_;
+  std::vector<double> fixedGradX_, fixedGradY_, fixedGradZ_; // grad Phi per fluid particle (tabulated)
   std::vector<double> refX_, refY_, refZ_; // positions at the last rebuild (skin test)
 
   double time_ = 0.0;

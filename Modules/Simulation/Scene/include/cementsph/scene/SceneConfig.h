@@ -21,10 +21,17 @@
 //                                   (ours, not the paper's: at factor 1 the compressed cloud, ~1.4 kPa against
 //                                   rho0 cs^2 = 1.18 kPa, entered the solid; docs/scene-figures.md)
 //   drag_coefficient, sound_speed_m_per_s, integrator   override the model preset
+//   fixed_particle_sums "exact"|"tabulated"   how the solid's share of Eq. 2 / Eq. 5 is summed
+//                                   (FixedParticleField.h)                    preset default: tabulated,
+//                                                                             preset paper: exact
+//   fixed_field_spacing_over_h      tabulated: grid spacing / h (0..1]                      1/3
+//   max_displacement_over_h         overdamped: largest move per step / h (0..1]           model preset
+//   neighbour_skin_over_h           Verlet skin / h (0..2]                                 model preset
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
 #pragma once
 
+#include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/ViscositySchedule.h"
 
 #include <Eigen/Core>
@@ -58,12 +65,15 @@ struct SceneConfig {
   std::optional<double> dragCoefficient;
   std::optional<double> soundSpeedMPerS;
   std::optional<std::string> integrator;
+  std::optional<std::string> fixedParticleSums;
+  std::optional<double> fixedFieldSpacingOverH, maxDisplacementOverH, neighbourSkinOverH;
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
   double volumeM3() const { return volumeMl * 1e-6; }
   double injectionDurationS() const { return volumeMl / flowRateMlPerS; }
   sph::ViscositySchedule viscositySchedule() const;
+  sph::FixedSumMethod fixedSumMethod() const;
   // Throws std::invalid_argument naming the first key out of range (including a missing tip).
   void validate() const;
 };

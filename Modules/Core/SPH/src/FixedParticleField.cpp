@@ -1,0 +1,128 @@
+#include "cementsph/sph/FixedParticleField.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace cementsph::sph {
+
+void FixedParticleField::configure(const Domain& domain, double nodeSpacing, double smoothingLength) {
+  if (!(nodeSpacing > 0) || !(smoothingLength > 0)) throw std::invalid_argument("fixed field: spacing and h must be positive");
+  for (int a = 0; a < 3; ++a)
+    if (domain.periodic[a]) throw std::invalid_argument("fixed field: periodic sides are not supported (use exact sums)");
+  domain_ = domain;
+  nodeSpacing_ = nodeSpacing;
+  inverseSpacing_ = 1.0 / nodeSpacing;
+  h_ = smoothingLength;
+  const Eigen::Vector3d e = domain.extent();
+  std::size_t total = 1;
+  for (int a = 0; a < 3; ++a) {
+    const auto cells = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(e[a] * inverseSpacing_)));
+    bricksPerAxis_[a] = (cells + kBrick - 1) / kBrick;
+    total *= static_cast<std::size_t>(bricksPerAxis_[a]);
+  }
+  bricks_.clear();
+  bricks_.resize(total);
+  filled_ = 0;
+}
+
+void FixedParticleField::attach(const FixedParticles* fixed, const CellGrid* grid,
+                                const std::vector<std::uint32_t>* cellStart) {
+  fixed_ = fixed;
+  grid_ = grid;
+  cellStart_ = cellStart;
+  for (auto& b : bricks_) b.reset();
+  filled_ = 0;
+}
+
+FixedSums FixedParticleField::exact(double x, double y, double z) const {
+  FixedSums s;
+  if (!fixed_ || fixed_->size() == 0 || cellStart_->empty()) return s;
+  const CubicSplineKernel cubic(h_);
+  const SpikyKernel spiky(h_);
+  const double support2 = 4.0 * h_ * h_;
+  const double* FX = fixed_->x.data(); const double* FY = fixed_->y.data(); const double* FZ = fixed_->z.data();
+  const float* FM = fixed_->mass.data();
+  const std::vector<std::uint32_t>& start = *cellStart_;
+  const int cell = grid_->cellOf(x, y, z);
+  for (const std::uint32_t* c = grid_->neighbourCellsBegin(cell); c != grid_->neighbourCellsEnd(cell); ++c)
+    for (std::uint32_t j = start[*c]; j < start[*c + 1]; ++j) {
+      const double dx = x - FX[j], dy = y - FY[j], dz = z - FZ[j];
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      if (r2 >= support2) continue;
+      const double r = std::sqrt(r2), m = static_cast<double>(FM[j]);
+      s.density += m * cubic.value(r);
+      if (r > 1e-12 * h_) { // the spiky gradient has no direction at r = 0: the symmetric choice, zero
+        const double g = m * spiky.derivative(r) / r;
+        s.gradient[0] += g * dx; s.gradient[1] += g * dy; s.gradient[2] += g * dz;
+      }
+    }
+  return s;
+}
+
+std::size_t FixedParticleField::brickIndex(double x, double y, double z, int local[3], double frac[3]) const {
+  const double p[3] = {x, y, z};
+  std::int64_t b[3];
+  for (int a = 0; a < 3; ++a) {
+    const double u = (p[a] - domain_.lower[a]) * inverseSpacing_;
+    const std::int64_t cells = bricksPerAxis_[a] * kBrick;
+    const std::int64_t c = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor(u)), 0, cells - 1);
+    frac[a] = std::clamp(u - static_cast<double>(c), 0.0, 1.0);
+    b[a] = c / kBrick;
+    local[a] = static_cast<int>(c - b[a] * kBrick);
+  }
+  return static_cast<std::size_t>((b[2] * bricksPerAxis_[1] + b[1]) * bricksPerAxis_[0] + b[0]);
+}
+
+void FixedParticleField::fillBrick(std::size_t b) {
+  const std::int64_t bx = static_cast<std::int64_t>(b) % bricksPerAxis_[0];
+  const std::int64_t by = (static_cast<std::int64_t>(b) / bricksPerAxis_[0]) % bricksPerAxis_[1];
+  const std::int64_t bz = static_cast<std::int64_t>(b) / (bricksPerAxis_[0] * bricksPerAxis_[1]);
+  FixedSums* nodes = bricks_[b].get();
+  for (int k = 0; k < kNodesPerEdge; ++k)
+    for (int j = 0; j < kNodesPerEdge; ++j)
+      for (int i = 0; i < kNodesPerEdge; ++i)
+        nodes[(k * kNodesPerEdge + j) * kNodesPerEdge + i] =
+            exact(domain_.lower.x() + static_cast<double>(bx * kBrick + i) * nodeSpacing_,
+                  domain_.lower.y() + static_cast<double>(by * kBrick + j) * nodeSpacing_,
+                  domain_.lower.z() + static_cast<double>(bz * kBrick + k) * nodeSpacing_);
+}
+
+void FixedParticleField::prepare(const double* x, const double* y, const double* z, std::size_t n) {
+  if (!configured()) throw std::logic_error("fixed field used before configure()");
+  std::vector<std::size_t> todo;
+  int local[3];
+  double frac[3];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t b = brickIndex(x[i], y[i], z[i], local, frac);
+    if (!bricks_[b]) {
+      bricks_[b] = std::make_unique<FixedSums[]>(kNodesPerBrick);
+      todo.push_back(b);
+    }
+  }
+  if (todo.empty()) return;
+  const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(todo.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::ptrdiff_t t = 0; t < count; ++t) fillBrick(todo[static_cast<std::size_t>(t)]);
+  filled_ += todo.size();
+}
+
+void FixedParticleField::sample(double x, double y, double z, double& density, double gradient[3]) const {
+  int l[3];
+  double f[3];
+  const FixedSums* nodes = bricks_[brickIndex(x, y, z, l, f)].get();
+  const double g[3] = {1.0 - f[0], 1.0 - f[1], 1.0 - f[2]};
+  double d = 0.0, gx = 0.0, gy = 0.0, gz = 0.0;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        const FixedSums& s = nodes[((l[2] + k) * kNodesPerEdge + (l[1] + j)) * kNodesPerEdge + (l[0] + i)];
+        const double w = (i ? f[0] : g[0]) * (j ? f[1] : g[1]) * (k ? f[2] : g[2]);
+        d += w * s.density;
+        gx += w * s.gradient[0]; gy += w * s.gradient[1]; gz += w * s.gradient[2];
+      }
+  density = d;
+  gradient[0] = gx; gradient[1] = gy; gradient[2] = gz;
+}
+
+} // namespace cementsph::sph
