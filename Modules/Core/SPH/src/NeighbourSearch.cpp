@@ -50,14 +50,18 @@ void CellGrid::configure(const Domain& domain, double minCellSize) {
       }
 }
 
-int CellGrid::cellOf(double x, double y, double z) const {
+void CellGrid::cellCoordinates(double x, double y, double z, std::int64_t c[3]) const {
   const double p[3] = {x, y, z};
-  std::int64_t c[3];
   for (int a = 0; a < 3; ++a) {
     std::int64_t v = static_cast<std::int64_t>(std::floor((p[a] - domain_.lower[a]) * inverseCellSize_[a]));
     c[a] = std::clamp<std::int64_t>(v, 0, cellsPerAxis_[a] - 1);
   }
-  return static_cast<int>(c[0] + cellsPerAxis_[0] * (c[1] + cellsPerAxis_[1] * c[2]));
+}
+
+int CellGrid::cellOf(double x, double y, double z) const {
+  std::int64_t c[3];
+  cellCoordinates(x, y, z, c);
+  return cellIndex(c[0], c[1], c[2]);
 }
 
 void CellGrid::bin(const double* x, const double* y, const double* z, std::size_t n,

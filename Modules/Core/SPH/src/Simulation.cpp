@@ -12,6 +12,10 @@ namespace cementsph::sph {
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Loops that do a few operations per particle run on one thread below this many particles: their
+// work is microseconds, and every parallel loop ends in a barrier that costs far more when another
+// program holds a core (measured: 2 threads 6x slower than 1 on a loaded 2-core machine).
+constexpr std::size_t kParallelMinimum = 16384;
 
 std::string formatSeconds(double s) {
   char b[32];
@@ -97,13 +101,17 @@ std::uint64_t Simulation::addFluidParticle(const Eigen::Vector3d& position, cons
     fluid_.yp[i] = position.y() - velocity.y() * centralDifferenceStep_;
     fluid_.zp[i] = position.z() - velocity.z() * centralDifferenceStep_;
   }
-  // A newcomer joins the valid lists unless too many have queued since the last rebuild (the pairs of
-  // newcomers are summed serially).
-  const std::size_t newcomerLimit = std::max<std::size_t>(64, listed_ / 8);
-  if (listsValid_ && parameters_.insertWithoutRebuild && i == refX_.size() && i - listed_ < newcomerLimit)
-    addNewcomerLists(i);
-  else
+  // A newcomer is relisted (its lists are made at the next update) instead of rebuilding every list.
+  if (listsValid_ && parameters_.insertWithoutRebuild && i == refX_.size()) {
+    refX_.push_back(fluid_.x[i]);
+    refY_.push_back(fluid_.y[i]);
+    refZ_.push_back(fluid_.z[i]);
+    relisted_.push_back(1);
+    relistedIndex_.push_back(static_cast<std::uint32_t>(i));
+    relistsDirty_ = true;
+  } else {
     listsValid_ = false;
+  }
   return nextId_++;
 }
 
@@ -126,24 +134,46 @@ std::size_t Simulation::bytesPerFixedParticle() const {
 // Neighbour lists
 // ------------------------------------------------------------------------------------------------
 
-bool Simulation::listsNeedRebuild() const {
-  if (!listsValid_ || !fixedBinned_ || refX_.size() != fluid_.size()) return true;
-  const double skin = parameters_.neighbourSkin * parameters_.smoothingLength;
-  if (skin <= 0) return true;
-  const double limit2 = 0.25 * skin * skin; // rebuild once any particle moved half the skin
+void Simulation::updateNeighbourLists() {
   const std::size_t n = fluid_.size();
-  int exceeded = 0;
-#pragma omp parallel for schedule(static) reduction(max : exceeded)
-  for (std::size_t i = 0; i < n; ++i) {
+  const double skin = parameters_.neighbourSkin * parameters_.smoothingLength;
+  if (!listsValid_ || !fixedBinned_ || refX_.size() != n || skin <= 0) {
+    rebuildNeighbourLists();
+    return;
+  }
+  const double limit2 = 0.25 * skin * skin; // a particle may move half the skin from its reference
+  auto moved = [&](std::size_t i) {
     double d[3] = {fluid_.x[i] - refX_[i], fluid_.y[i] - refY_[i], fluid_.z[i] - refZ_[i]};
     if (anyPeriodic_)
       for (int a = 0; a < 3; ++a) {
         if (d[a] > halfExtent_[a]) d[a] -= extent_[a];
         else if (d[a] < -halfExtent_[a]) d[a] += extent_[a];
       }
-    if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > limit2) exceeded = 1;
+    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > limit2;
+  };
+  std::size_t count = 0;
+#pragma omp parallel for schedule(static) reduction(+ : count) if (n >= kParallelMinimum)
+  for (std::size_t i = 0; i < n; ++i) count += moved(i) ? 1 : 0;
+  const std::size_t relistLimit = parameters_.insertWithoutRebuild ? std::max<std::size_t>(64, n / 16) : 0;
+  if (count == 0 && !relistsDirty_) return;
+  if (relistedIndex_.size() + count > relistLimit) {
+    rebuildNeighbourLists();
+    return;
   }
-  return exceeded != 0;
+  if (count > 0) {
+    bool added = false;
+    for (std::size_t i = 0; i < n; ++i)
+      if (moved(i)) {
+        refX_[i] = fluid_.x[i]; refY_[i] = fluid_.y[i]; refZ_[i] = fluid_.z[i];
+        if (!relisted_[i]) {
+          relisted_[i] = 1;
+          relistedIndex_.push_back(static_cast<std::uint32_t>(i));
+          added = true;
+        }
+      }
+    if (added) std::sort(relistedIndex_.begin(), relistedIndex_.end());
+  }
+  buildRelistedLists();
 }
 
 void Simulation::rebuildNeighbourLists() {
@@ -173,10 +203,13 @@ void Simulation::rebuildNeighbourLists() {
   refY_ = fluid_.y;
   refZ_ = fluid_.z;
   listed_ = fluid_.size();
-  newFluid_.offset.assign(1, 0);
-  newFluid_.index.clear();
-  newFixed_.offset.assign(1, 0);
-  newFixed_.index.clear();
+  relisted_.assign(listed_, 0);
+  relistedIndex_.clear();
+  relistedFluid_.offset.assign(1, 0);
+  relistedFluid_.index.clear();
+  relistedFixed_.offset.assign(1, 0);
+  relistedFixed_.index.clear();
+  relistsDirty_ = false;
   listsValid_ = true;
   ++statistics_.neighbourRebuilds;
 }
@@ -254,16 +287,13 @@ template <bool Periodic> void Simulation::buildLists() {
   }
 }
 
-void Simulation::addNewcomerLists(std::size_t i) {
-  // The Verlet guarantee holds if every pair is judged at the reference positions with the list radius
-  // (each particle then stays within half the skin of its reference until the next rebuild), so the
-  // newcomer is compared with the others' references, not their current positions.
-  refX_.push_back(fluid_.x[i]);
-  refY_.push_back(fluid_.y[i]);
-  refZ_.push_back(fluid_.z[i]);
+void Simulation::buildRelistedLists() {
+  // Pairs are judged at reference positions with the list radius, as in a full rebuild: each particle
+  // stays within half the skin of its reference, so no pair left out can come within the support. The
+  // non-relisted particles' references are their positions at the last rebuild, where the grid binned
+  // them (indices < listed_), so the grid finds them; relisted ones are few and searched directly.
   const double radius = densityKernel_.support() + parameters_.neighbourSkin * parameters_.smoothingLength;
   const double r2max = radius * radius;
-  const double xi = refX_[i], yi = refY_[i], zi = refZ_[i];
   auto dist2 = [&](double dx, double dy, double dz) {
     if (anyPeriodic_) {
       if (dx > halfExtent_[0]) dx -= extent_[0]; else if (dx < -halfExtent_[0]) dx += extent_[0];
@@ -272,16 +302,30 @@ void Simulation::addNewcomerLists(std::size_t i) {
     }
     return dx * dx + dy * dy + dz * dz;
   };
-  for (std::size_t j = 0; j < i; ++j)
-    if (dist2(xi - refX_[j], yi - refY_[j], zi - refZ_[j]) < r2max) newFluid_.index.push_back(static_cast<std::uint32_t>(j));
-  newFluid_.offset.push_back(newFluid_.index.size());
-  if (!tabulated_ && !fixedCellStart_.empty()) {
+  relistedFluid_.offset.assign(1, 0);
+  relistedFluid_.index.clear();
+  relistedFixed_.offset.assign(1, 0);
+  relistedFixed_.index.clear();
+  for (std::size_t q = 0; q < relistedIndex_.size(); ++q) {
+    const std::uint32_t i = relistedIndex_[q];
+    const double xi = refX_[i], yi = refY_[i], zi = refZ_[i];
     const int cell = grid_.cellOf(xi, yi, zi);
     for (const std::uint32_t* c = grid_.neighbourCellsBegin(cell); c != grid_.neighbourCellsEnd(cell); ++c)
-      for (std::uint32_t j = fixedCellStart_[*c]; j < fixedCellStart_[*c + 1]; ++j)
-        if (dist2(xi - fixed_.x[j], yi - fixed_.y[j], zi - fixed_.z[j]) < r2max) newFixed_.index.push_back(j);
+      for (std::uint32_t j = fluidCellStart_[*c]; j < fluidCellStart_[*c + 1]; ++j)
+        if (!relisted_[j] && dist2(xi - refX_[j], yi - refY_[j], zi - refZ_[j]) < r2max) relistedFluid_.index.push_back(j);
+    for (std::size_t p = 0; p < q; ++p) {
+      const std::uint32_t j = relistedIndex_[p];
+      if (dist2(xi - refX_[j], yi - refY_[j], zi - refZ_[j]) < r2max) relistedFluid_.index.push_back(j);
+    }
+    relistedFluid_.offset.push_back(relistedFluid_.index.size());
+    if (!tabulated_ && !fixedCellStart_.empty())
+      for (const std::uint32_t* c = grid_.neighbourCellsBegin(cell); c != grid_.neighbourCellsEnd(cell); ++c)
+        for (std::uint32_t j = fixedCellStart_[*c]; j < fixedCellStart_[*c + 1]; ++j)
+          if (dist2(xi - fixed_.x[j], yi - fixed_.y[j], zi - fixed_.z[j]) < r2max) relistedFixed_.index.push_back(j);
+    relistedFixed_.offset.push_back(relistedFixed_.index.size());
   }
-  newFixed_.offset.push_back(newFixed_.index.size());
+  relistsDirty_ = false;
+  ++statistics_.relistings;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -289,7 +333,7 @@ void Simulation::addNewcomerLists(std::size_t i) {
 // ------------------------------------------------------------------------------------------------
 
 void Simulation::updateDensityAndPressure() {
-  if (listsNeedRebuild()) rebuildNeighbourLists();
+  updateNeighbourLists();
   if (anyPeriodic_) densityPass<true>();
   else densityPass<false>();
 }
@@ -338,12 +382,15 @@ template <bool Periodic> void Simulation::densityPass() {
   const std::uint32_t* fl = fluidNeighbours_.index.data();
   const std::uint32_t* sl = fixedNeighbours_.index.data();
   const std::size_t listed = listed_;
+  const std::uint8_t* relisted = relisted_.data();
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < listed; ++i) {
+    if (relisted[i]) continue; // summed from its own lists below
     const double xi = X[i], yi = Y[i], zi = Z[i];
     double rho = M[i] * w0; // the particle itself
     for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
       const std::uint32_t j = fl[k];
+      if (relisted[j]) continue; // the pair is in j's lists
       double dx = xi - X[j], dy = yi - Y[j], dz = zi - Z[j];
       CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
       const double r2 = dx * dx + dy * dy + dz * dz;
@@ -353,12 +400,12 @@ template <bool Periodic> void Simulation::densityPass() {
     RHO[i] = rho;
     P[i] = cs2 * (rho - rho0);
   }
-  // Newcomers since the last rebuild, in order: each pair (i, j < i) adds to both.
-  for (std::size_t i = listed; i < n; ++i) {
-    const std::size_t q = i - listed;
-    double rho = M[i] * w0 + fixedDensity(i, newFixed_.index.data(), newFixed_.offset[q], newFixed_.offset[q + 1]);
-    for (std::uint64_t k = newFluid_.offset[q]; k < newFluid_.offset[q + 1]; ++k) {
-      const std::uint32_t j = newFluid_.index[k];
+  // Relisted particles, in ascending order: each pair in their lists adds to both partners.
+  for (std::size_t q = 0; q < relistedIndex_.size(); ++q) {
+    const std::size_t i = relistedIndex_[q];
+    double rho = M[i] * w0 + fixedDensity(i, relistedFixed_.index.data(), relistedFixed_.offset[q], relistedFixed_.offset[q + 1]);
+    for (std::uint64_t k = relistedFluid_.offset[q]; k < relistedFluid_.offset[q + 1]; ++k) {
+      const std::uint32_t j = relistedFluid_.index[k];
       double dx = X[i] - X[j], dy = Y[i] - Y[j], dz = Z[i] - Z[j];
       CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
       const double r2 = dx * dx + dy * dy + dz * dz;
@@ -393,7 +440,7 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
   // p / rho^2 of each particle, used by every pair (Eq. 5).
   pressureOverDensity2_.resize(n);
   double* pr2 = pressureOverDensity2_.data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) pr2[i] = fluid_.pressure[i] / (fluid_.density[i] * fluid_.density[i]);
   const double fixedPr2 = fixed_.pressure / (fixed_.density * fixed_.density);
   const double* X = fluid_.x.data(); const double* Y = fluid_.y.data(); const double* Z = fluid_.z.data();
@@ -458,11 +505,14 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
   const std::uint32_t* fl = fluidNeighbours_.index.data();
   const std::uint32_t* sl = fixedNeighbours_.index.data();
   const std::size_t listed = listed_;
+  const std::uint8_t* relisted = relisted_.data();
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < listed; ++i) {
+    if (relisted[i]) continue; // summed from its own lists below
     double ax = g.x(), ay = g.y(), az = g.z();
     for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
       const std::uint32_t j = fl[k];
+      if (relisted[j]) continue; // the pair is in j's lists
       double fx, fy, fz;
       pairForce(i, j, fx, fy, fz);
       ax += M[j] * fx; ay += M[j] * fy; az += M[j] * fz;
@@ -470,18 +520,18 @@ template <bool Periodic, bool Morris> void Simulation::forcePass() {
     fixedForce(i, sl, fixedNeighbours_.offset[i], fixedNeighbours_.offset[i + 1], ax, ay, az);
     AX[i] = ax; AY[i] = ay; AZ[i] = az;
   }
-  // Newcomers since the last rebuild, in order: each pair (i, j < i) acts on both.
-  for (std::size_t i = listed; i < n; ++i) {
-    const std::size_t q = i - listed;
+  // Relisted particles, in ascending order: each pair in their lists acts on both partners.
+  for (std::size_t q = 0; q < relistedIndex_.size(); ++q) {
+    const std::size_t i = relistedIndex_[q];
     double ax = g.x(), ay = g.y(), az = g.z();
-    for (std::uint64_t k = newFluid_.offset[q]; k < newFluid_.offset[q + 1]; ++k) {
-      const std::uint32_t j = newFluid_.index[k];
+    for (std::uint64_t k = relistedFluid_.offset[q]; k < relistedFluid_.offset[q + 1]; ++k) {
+      const std::uint32_t j = relistedFluid_.index[k];
       double fx, fy, fz;
       pairForce(i, j, fx, fy, fz);
       ax += M[j] * fx; ay += M[j] * fy; az += M[j] * fz;
       AX[j] -= M[i] * fx; AY[j] -= M[i] * fy; AZ[j] -= M[i] * fz;
     }
-    fixedForce(i, newFixed_.index.data(), newFixed_.offset[q], newFixed_.offset[q + 1], ax, ay, az);
+    fixedForce(i, relistedFixed_.index.data(), relistedFixed_.offset[q], relistedFixed_.offset[q + 1], ax, ay, az);
     AX[i] = ax; AY[i] = ay; AZ[i] = az;
   }
 }
@@ -495,7 +545,7 @@ double Simulation::maxDragRate() const {
   if (parameters_.viscosityModel != ViscosityModel::Drag) return 0;
   double g = 0;
   const std::size_t n = fluid_.size();
-#pragma omp parallel for schedule(static) reduction(max : g)
+#pragma omp parallel for schedule(static) reduction(max : g) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) g = std::max(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
   return g;
 }
@@ -504,7 +554,7 @@ double Simulation::minDragRate() const {
   if (parameters_.viscosityModel != ViscosityModel::Drag) return 0;
   double g = kInf;
   const std::size_t n = fluid_.size();
-#pragma omp parallel for schedule(static) reduction(min : g)
+#pragma omp parallel for schedule(static) reduction(min : g) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) g = std::min(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
   return g;
 }
@@ -519,7 +569,7 @@ StepLimits Simulation::currentLimits() const {
     const double gmin = minDragRate();
     l.overdamped = p.overdampedStability * gmin * h * h / (p.soundSpeed * p.soundSpeed);
     // v = a / gamma; the fastest particle bounds the step for accuracy.
-#pragma omp parallel for schedule(static) reduction(max : vmax2)
+#pragma omp parallel for schedule(static) reduction(max : vmax2) if (n >= kParallelMinimum)
     for (std::size_t i = 0; i < n; ++i) {
       const double g = p.dragRate(fluid_.mass[i], fluid_.density[i]);
       const double a2 = fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i];
@@ -529,7 +579,7 @@ StepLimits Simulation::currentLimits() const {
     return l;
   }
   l.acoustic = p.acousticCourant * h / p.soundSpeed;
-#pragma omp parallel for schedule(static) reduction(max : amax2)
+#pragma omp parallel for schedule(static) reduction(max : amax2) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i)
     amax2 = std::max(amax2, fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i]);
   if (amax2 > 0) l.force = p.forceCourant * std::sqrt(h / std::sqrt(amax2));
@@ -601,7 +651,7 @@ void Simulation::integrate(double dt) {
     // Eq. 8 with a_i = a_other - gamma v_i and v_i = (r+ - r-) / (2 dt), solved for r+ per particle
     // (the drag acts on a particle's own velocity only, so the system is diagonal):
     //   r+ = [2 r - (1 - gamma dt/2) r- + dt^2 a_other] / (1 + gamma dt/2)
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
     for (std::size_t i = 0; i < n; ++i) {
       const double gdt2 = drag ? 0.5 * dt * p.dragRate(f.mass[i], f.density[i]) : 0.0;
       const double inv = 1.0 / (1.0 + gdt2), c = 1.0 - gdt2, dt2 = dt * dt;
@@ -618,7 +668,7 @@ void Simulation::integrate(double dt) {
   }
   case Integrator::Explicit: {
     // Symplectic Euler: v += dt (a - gamma v); r += dt v.
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
     for (std::size_t i = 0; i < n; ++i) {
       const double g = drag ? p.dragRate(f.mass[i], f.density[i]) : 0.0;
       f.vx[i] += dt * (f.ax[i] - g * f.vx[i]);
@@ -631,7 +681,7 @@ void Simulation::integrate(double dt) {
   }
   case Integrator::Overdamped: {
     // Creeping flow: inertia negligible (gamma dt >> 1), so the drag balances the other forces.
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
     for (std::size_t i = 0; i < n; ++i) {
       const double invG = 1.0 / p.dragRate(f.mass[i], f.density[i]);
       f.vx[i] = f.ax[i] * invG; f.vy[i] = f.ay[i] * invG; f.vz[i] = f.az[i] * invG;
@@ -685,7 +735,7 @@ void Simulation::checkHealth(double dt) const {
   const std::size_t n = fluid_.size();
   const double vmax = parameters_.runawaySpeedFactor * parameters_.soundSpeed;
   std::size_t firstBad = n;
-#pragma omp parallel for schedule(static) reduction(min : firstBad)
+#pragma omp parallel for schedule(static) reduction(min : firstBad) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double v2 = fluid_.vx[i] * fluid_.vx[i] + fluid_.vy[i] * fluid_.vy[i] + fluid_.vz[i] * fluid_.vz[i];
     const bool finite = std::isfinite(fluid_.x[i]) && std::isfinite(fluid_.y[i]) && std::isfinite(fluid_.z[i]) &&

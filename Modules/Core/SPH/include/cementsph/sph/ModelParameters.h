@@ -62,7 +62,7 @@ struct ModelParameters {
 
   // --- fixed particles ------------------------------------------------------------------------
   FixedSumMethod fixedSums = FixedSumMethod::Exact;
-  double fixedFieldSpacing = 1.0 / 3.0; // Tabulated: node spacing as a fraction of h
+  double fixedFieldSpacing = 0.25; // Tabulated: node spacing as a fraction of h (VALIDATION.md: h/4)
 
   // --- safety ---------------------------------------------------------------------------------
   double runawaySpeedFactor = 10.0; // a particle faster than this many cs means the run went unstable

@@ -23,6 +23,11 @@ public:
   const std::int64_t* cellsPerAxis() const { return cellsPerAxis_; }
   // Cell of a point; points outside an open axis are clamped to the border cell.
   int cellOf(double x, double y, double z) const;
+  // The same as per-axis cell coordinates, and back.
+  void cellCoordinates(double x, double y, double z, std::int64_t c[3]) const;
+  int cellIndex(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return static_cast<int>(i + cellsPerAxis_[0] * (j + cellsPerAxis_[1] * k));
+  }
   // The distinct cells within one cell of `cell` (<= 27; fewer at open borders or on narrow periodic axes).
   const std::uint32_t* neighbourCellsBegin(int cell) const { return &stencil_[stencilOffset_[cell]]; }
   const std::uint32_t* neighbourCellsEnd(int cell) const { return &stencil_[stencilOffset_[cell + 1]]; }

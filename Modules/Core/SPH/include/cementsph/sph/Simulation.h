@@ -45,6 +45,7 @@ struct StepLimits {
 struct StepStatistics {
   std::uint64_t steps = 0;
   std::uint64_t neighbourRebuilds = 0;
+  std::uint64_t relistings = 0; // list updates of the relisted particles alone (no full rebuild)
   double smallestStep = 0.0, largestStep = 0.0;
 };
 
@@ -84,7 +85,7 @@ public:
   // The step the next call to step() will take, given the current state.
   double nextTimeStep() const;
   std::size_t neighbourPairCount() const {
-    return fluidNeighbours_.size() + fixedNeighbours_.size() + newFluid_.size() + newFixed_.size();
+    return fluidNeighbours_.size() + fixedNeighbours_.size() + relistedFluid_.size() + relistedFixed_.size();
   }
   // The tabulated fixed-particle sums (FixedSumMethod::Tabulated), for tests and reports.
   const FixedParticleField& fixedField() const { return field_; }
@@ -94,10 +95,10 @@ public:
 
 private:
   void validateParameters() const;
-  bool listsNeedRebuild() const;
+  void updateNeighbourLists();
   void rebuildNeighbourLists();
   template <bool Periodic> void buildLists();
-  void addNewcomerLists(std::size_t i);
+  void buildRelistedLists();
   template <bool Periodic> void densityPass();
   template <bool Periodic, bool Morris> void forcePass();
   double chooseTimeStep(const StepLimits& limits);
@@ -122,10 +123,18 @@ private:
   bool fixedBinned_ = false;
   NeighbourList fluidNeighbours_, fixedNeighbours_;
   bool listsValid_ = false;
-  // Particles [0, listed_) have the lists above; later ones were added since the last rebuild and have
-  // their own lists: fluid neighbours j < i only (each such pair is applied to both), and fixed ones.
+  // Relisting (ours): the lists above belong to particles [0, listed_) and hold while each particle
+  // stays within half the skin of its reference position. Where only a few move that far (in an
+  // injection, those near the tip), they alone are "relisted": new reference, their own lists
+  // (relistedFluid_: every non-relisted neighbour, and relisted ones of lower index; relistedFixed_),
+  // and every pair with one of them is summed from those lists for both partners, the others' entries
+  // for them being skipped. Particles added since the rebuild are relisted from birth. A full rebuild
+  // happens when too many are relisted.
   std::size_t listed_ = 0;
-  NeighbourList newFluid_, newFixed_;
+  std::vector<std::uint8_t> relisted_;         // per fluid particle
+  std::vector<std::uint32_t> relistedIndex_;   // the relisted particles, ascending
+  NeighbourList relistedFluid_, relistedFixed_; // per relisted particle, in relistedIndex_ order
+  bool relistsDirty_ = false;
   std::vector<std::vector<std::uint32_t>> listScratch_; // per-thread list buffers of buildLists
   bool tabulated_ = false;
   FixedParticleField field_;

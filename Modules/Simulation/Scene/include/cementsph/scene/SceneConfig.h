@@ -24,8 +24,8 @@
 //   fixed_particle_sums "exact"|"tabulated"   how the solid's share of Eq. 2 / Eq. 5 is summed
 //                                   (FixedParticleField.h)                    preset default: tabulated,
 //                                                                             preset paper: exact
-//   fixed_field_spacing_over_h      tabulated: grid spacing / h (0..1]                      1/3
-//   max_displacement_over_h         overdamped: largest move per step / h (0..1]           model preset
+//   fixed_field_spacing_over_h      tabulated: grid spacing / h (0..1]                      0.25
+//   max_displacement_over_h         overdamped: largest move per step / h (0..1]           0.25
 //   neighbour_skin_over_h           Verlet skin / h (0..2]                                 model preset
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
