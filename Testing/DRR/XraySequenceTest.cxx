@@ -36,7 +36,7 @@ using cementsph::drrtest::Vec3;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kCementRadiusMm = 5.0, kCylinderLengthMm = 6.0;
+constexpr double kCementRadiusMm = 5.0, kCylinderLengthMm = 6.5; // its ends on voxel faces
 constexpr double kTissueHU = 40.0, kCementExcessHU = 3000.0;
 const double kCementExtraMuPerMm = drr::AttenuationVolume::kMuWaterPerMm * kCementExcessHU / 1000.0; // 0.066
 
@@ -47,7 +47,7 @@ enum class Cement { None, Ball, Cylinder };
 const Vec3 kCentre{0.0, 0.17, 0.23};
 
 // 61^3 voxels of 0.5 mm centred on the origin: a soft-tissue ball (r 14 mm) and, optionally, cement: a ball
-// of radius 5 mm, or a cylinder of radius 5 mm and length 6 mm along x (the beam at gantry 0). 5^3
+// of radius 5 mm, or a cylinder of radius 5 mm and length 6.5 mm along x (the beam at gantry 0). 5^3
 // sub-samples per voxel: partial-volume fractions in steps of 1/25 across the beam, never exactly 1/2.
 // Made once per (cement, centre): several tests project the same volumes.
 vtkSmartPointer<vtkImageData> frameVolume(Cement cement, const Vec3& c = kCentre) {
@@ -69,7 +69,7 @@ vtkSmartPointer<vtkImageData> frameVolume(Cement cement, const Vec3& c = kCentre
 
 // Half the cylinder's excess line integral, in mm of water: the unbiased threshold for its edge.
 double halfCylinderWaterMm() {
-  return 0.5 * kCylinderLengthMm * kCementExtraMuPerMm / drr::AttenuationVolume::kMuWaterPerMm; // 9 mm
+  return 0.5 * kCylinderLengthMm * kCementExtraMuPerMm / drr::AttenuationVolume::kMuWaterPerMm; // 9.75 mm
 }
 
 XraySequenceOptions coneBeam(double thresholdWaterMm) {

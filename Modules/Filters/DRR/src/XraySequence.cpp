@@ -8,10 +8,46 @@
 #include <vtkPointData.h>
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace cementsph::drr {
+
+namespace {
+
+// Labels the 8-connected regions of mask (cols x rows, j = 0 the bottom row): labels[p] = 0 outside the
+// mask, 1, 2, ... for the regions in scan order. Returns the number of regions.
+std::size_t labelRegions(std::vector<int>& labels, const unsigned char* mask, int cols, int rows) {
+  labels.assign(static_cast<std::size_t>(cols) * rows, 0);
+  std::size_t regions = 0;
+  std::vector<int> stack;
+  for (int start = 0; start < cols * rows; ++start) {
+    if (!mask[start] || labels[start]) continue;
+    const int label = static_cast<int>(++regions);
+    labels[start] = label;
+    stack.assign(1, start);
+    while (!stack.empty()) {
+      const int p = stack.back();
+      stack.pop_back();
+      const int i = p % cols, j = p / cols;
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int ii = i + di, jj = j + dj;
+          if (ii < 0 || jj < 0 || ii >= cols || jj >= rows) continue;
+          const int q = jj * cols + ii;
+          if (mask[q] && !labels[q]) {
+            labels[q] = label;
+            stack.push_back(q);
+          }
+        }
+    }
+  }
+  return regions;
+}
+
+} // namespace
 
 double XraySequence::drrPerWaterMm() { return AttenuationVolume::kMuWaterPerMm * vtkDRRFilter::kPixelScale; }
 
@@ -21,6 +57,12 @@ XraySequence::XraySequence(const XraySequenceOptions& options) : options_(option
     throw std::invalid_argument("the cement threshold must be a positive number of mm of water (got " +
                                 std::to_string(options.cementThresholdWaterMm) + ")");
   if (options.threads < 0) throw std::invalid_argument("the number of threads must be 0 or more");
+  if (options.injectionPointMm) {
+    for (double c : *options.injectionPointMm)
+      if (!std::isfinite(c)) throw std::invalid_argument("the injection point must be finite");
+    if (!(options.injectionSearchRadiusMm >= 0.0))
+      throw std::invalid_argument("the injection search radius must be 0 mm or more");
+  }
 }
 
 double XraySequence::thresholdDrr() const { return options_.cementThresholdWaterMm * drrPerWaterMm(); }
@@ -46,11 +88,31 @@ void XraySequence::addFrame(double timeS, vtkImageData* volumeHU) {
   // Frame 0 is the background: nothing has been added to it, so its mask is empty by definition.
   const float* background = frames_.empty() ? pixels : static_cast<const float*>(frames_[0].drr->GetScalarPointer());
   const double threshold = thresholdDrr();
-  for (std::size_t p = 0; p < n; ++p) {
+  for (std::size_t p = 0; p < n; ++p)
     mask[p] = static_cast<double>(pixels[p]) - static_cast<double>(background[p]) > threshold ? 1 : 0;
-    frame.cementPixels += mask[p];
-  }
   const DRRGeometry& g = options_.geometry;
+  std::vector<int> labels;
+  frame.regionsAboveThreshold = labelRegions(labels, mask, g.cols, g.rows);
+  if (options_.injectionPointMm && frame.regionsAboveThreshold > 0) {
+    // The region at the point's projection, else the nearest pixel's region within the search radius.
+    const auto ij = g.project(*options_.injectionPointMm);
+    const double m = g.isocentreMagnification();
+    int keep = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < g.rows; ++j)
+      for (int i = 0; i < g.cols; ++i) {
+        const int label = labels[static_cast<std::size_t>(j) * g.cols + i];
+        if (!label) continue;
+        // Distance in the isocentre plane from the projected point to the pixel's square (0 inside it).
+        const double du = std::max(0.0, std::abs(i - ij[0]) - 0.5) * g.pixelWidthMm() / m;
+        const double dv = std::max(0.0, std::abs(j - ij[1]) - 0.5) * g.pixelHeightMm() / m;
+        const double d = std::hypot(du, dv);
+        if (d < best) best = d, keep = label;
+      }
+    if (best > options_.injectionSearchRadiusMm) keep = 0;
+    for (std::size_t p = 0; p < n; ++p) mask[p] = labels[p] == keep && keep != 0 ? 1 : 0;
+  }
+  for (std::size_t p = 0; p < n; ++p) frame.cementPixels += mask[p];
   frame.detectorAreaMm2 = static_cast<double>(frame.cementPixels) * g.pixelWidthMm() * g.pixelHeightMm();
   const double m = g.isocentreMagnification();
   frame.projectedAreaMm2 = frame.detectorAreaMm2 / (m * m);

@@ -10,6 +10,14 @@
 // mask's edge lies where the cement along the ray is about 1/3 mm thick, and CT noise (20 HU, ~0.1 mm of
 // water-equivalent along a 40 mm ray) stays well below it.
 //
+// Component rule (optional, as `compare` keeps the 3-D component at the injection point): given the
+// injection point, each mask keeps only its 8-connected region at the point's projection, or, when no
+// region contains it, the region nearest to it within injectionSearchRadiusMm (measured in the isocentre
+// plane); no region there gives an empty mask. A connected cement body projects to one connected region,
+// so this drops only what is not connected to the injection: subtraction artefacts such as the streaks a
+// sub-voxel misregistration leaves along faces parallel to the beam. Without the point every pixel above
+// the threshold counts.
+//
 // Projected area: the mask's pixel count times the pixel area, at the detector (detectorAreaMm2), and
 // scaled to the plane through the isocentre by (sad / sid)^2 (projectedAreaMm2, the size at the patient;
 // a parallel beam has no magnification). A sphere of radius r at the isocentre gives projectedAreaMm2 =
@@ -22,6 +30,7 @@
 #include <vtkSmartPointer.h>
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 namespace cementsph::drr {
@@ -29,6 +38,8 @@ namespace cementsph::drr {
 struct XraySequenceOptions {
   DRRGeometry geometry;
   double cementThresholdWaterMm = 1.0; // mm of water (see above); > 0
+  std::optional<Vec3> injectionPointMm; // the component rule above; none: every pixel above the threshold
+  double injectionSearchRadiusMm = 10.0; // in the isocentre plane
   int threads = 0;                     // OpenMP threads for the DRRs (0: OpenMP's default)
 };
 
@@ -37,6 +48,7 @@ struct XrayFrame {
   vtkSmartPointer<vtkImageData> drr;        // vtkDRRFilter's output: float, cols x rows x 1, spacing in mm
   vtkSmartPointer<vtkImageData> cementMask; // unsigned char 0/1 on the DRR's grid (empty for frame 0)
   std::size_t cementPixels = 0;
+  std::size_t regionsAboveThreshold = 0; // 8-connected regions before the component rule
   double detectorAreaMm2 = 0.0;  // cementPixels x pixel area at the detector
   double projectedAreaMm2 = 0.0; // detectorAreaMm2 x (sad / sid)^2: the area at the isocentre plane
 };
