@@ -419,8 +419,9 @@ cementsph::app::CommandRunner setupXray(CLI::App& sub) {
         const drr::XraySequence* ref = reference ? &*reference : nullptr;
         for (const drr::XraySequence* s : {&sequence, ref}) {
           if (s == nullptr) continue;
+          // The reference's frames are measured instants: markers only (a line would invent values between).
           rendering::ProjectedAreaSeries curve{s == &sequence ? "simulation" : "reference", {}, {},
-                                               s == &sequence ? kSequenceRgb : kReferenceRgb};
+                                               s == &sequence ? kSequenceRgb : kReferenceRgb, s == &sequence};
           for (const auto& f : s->frames()) {
             curve.timeS.push_back(f.timeS);
             curve.areaMm2.push_back(f.projectedAreaMm2);

@@ -21,6 +21,10 @@ namespace cementsph::rendering {
 
 namespace {
 
+// A panel with no frame at its instant (a DRR pixel is grey and an outline is saturated, so this tint
+// is never either).
+constexpr std::array<unsigned char, 3> kNoFrameRgb{235, 235, 242};
+
 [[noreturn]] void reject(const std::string& why) { throw std::invalid_argument("renderXrayFrames: " + why); }
 
 // An RGB canvas addressed top-down (VTK's image row 0 is the PNG's bottom row).
@@ -156,9 +160,9 @@ void renderXrayFrames(const std::vector<XrayFramesRow>& rows, const std::vector<
         canvas.text(columnLabels[c], font, left + (panelW - w) / 2, gap);
       }
       const XrayPanel& p = row.panels[c];
-      if (p.drr == nullptr) { // no frame at this instant: a light grey panel
+      if (p.drr == nullptr) { // no frame at this instant: a light blue-grey panel (no DRR pixel is tinted)
         for (int y = 0; y < panelH; ++y)
-          for (int x = 0; x < panelW; ++x) canvas.put(left + x, top + y, {235, 235, 235});
+          for (int x = 0; x < panelW; ++x) canvas.put(left + x, top + y, kNoFrameRgb);
         continue;
       }
       vtkDataArray* values = p.drr->GetPointData()->GetScalars();

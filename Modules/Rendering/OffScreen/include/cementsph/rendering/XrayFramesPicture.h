@@ -3,7 +3,7 @@
 // one column per instant, labelled with its time. The DRRs are drawn as a C-arm monitor shows them, dense
 // matter dark: grey = 255 (1 - value / windowMax), clamped; each row has one window, so the frames of a row
 // compare directly. The segmented cement's outline is drawn in the row's colour (1 px, the mask's boundary
-// at panel resolution). Pure pixel work written with vtkPNGWriter (text by VTK's FreeType, which needs no
+// at panel resolution); a column without a frame in a row is a light blue-grey panel. Pure pixel work written with vtkPNGWriter (text by VTK's FreeType, which needs no
 // GL): no render window, no display, the same bytes on every machine with the same fonts.
 #pragma once
 
