@@ -17,26 +17,14 @@
 #include <iostream>
 
 using namespace cementsph::rendering;
+using cementsph::rendering::test::expectMatchesBaseline;
 using cementsph::rendering::test::forgetDisplay;
+using cementsph::rendering::test::kBaselineDir;
 using cementsph::rendering::test::scratchFolder;
 using cementsph::rendering::test::summarisePng;
 
 namespace {
 
-const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
-
-void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName, double tolerance) {
-  const std::filesystem::path baseline = kBaselineDir / baselineName;
-  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
-    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
-    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
-  }
-  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
-  const double difference = imageDifference(rendered, baseline);
-  std::cout << "difference from baseline " << baselineName << ": " << difference
-            << " (mean absolute " << meanAbsoluteDifference(rendered, baseline) << ")\n";
-  EXPECT_LE(difference, tolerance) << rendered << " differs from " << baseline;
-}
 
 // A DRR-like image, 80 x 60 pixels of 0.5 mm: a textured background (bone-like) and a bright blob (cement)
 // of radius `radiusPx` at column `cx`; the mask is the blob.
