@@ -194,8 +194,12 @@ public:
     if (!created_.empty()) fs::remove_all(created_, ec);
   }
   const fs::path& path() const { return staging_; }
-  // Moves the files into the target (created when absent; files of the same name replaced).
+  // Moves the files into the target (created when absent; files of the same name replaced). A folder in
+  // the way of a file is found before anything moves.
   void publish() {
+    for (const auto& entry : fs::directory_iterator(staging_))
+      if (fs::is_directory(target_ / entry.path().filename()))
+        throw std::runtime_error((target_ / entry.path().filename()).string() + " is a folder; nothing was written");
     if (!fs::exists(target_)) {
       fs::rename(staging_, target_);
     } else {
@@ -227,7 +231,10 @@ cementsph::app::CommandRunner setupXray(CLI::App& sub) {
       ->delimiter(',');
   sub.add_option("--reference-times-s", a->referenceTimesS, "Times of a reference list, s (default 0, 1, 2, ...)")
       ->delimiter(',');
-  sub.add_option("--out", a->out, "Output folder (created; files of the same name are replaced)")->required();
+  sub.add_option("--out", a->out,
+                 "Output folder (created; files of the same name are replaced): sequence_drr_NNNN.nrrd/.png, "
+                 "reference_drr_NNNN.nrrd/.png, sequence.csv, metrics.json, xray_frames.png, projected_area.png")
+      ->required();
   cementsph::app::addDrrGeometryOptions(sub, a->drr,
                                         "Detector physical size, mm: height,width (default: fitted to the "
                                         "first frame's volume with a 10 % margin, square pixels)");

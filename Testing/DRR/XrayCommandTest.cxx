@@ -247,3 +247,16 @@ TEST_F(XrayCommand, BadInputIsOneLineNonZeroAndNoOutput) {
     EXPECT_FALSE(fs::exists(out.parent_path())) << c.message; // not even the parent it would have created
   }
 }
+
+TEST_F(XrayCommand, AFolderInTheWayOfAnOutputFileMovesNothing) {
+  const fs::path out = dir_ / "in-the-way";
+  fs::create_directories(out / "sequence.csv");
+  const ProgramRun r = runCementsph(listArgs(out));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("sequence.csv is a folder; nothing was written"), std::string::npos) << r.err;
+  std::size_t entries = 0;
+  for (const auto& e : fs::directory_iterator(out)) ++entries, (void)e;
+  EXPECT_EQ(entries, 1u); // only the folder that was there
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
