@@ -103,8 +103,9 @@ FrameList frameList(const std::vector<std::string>& values, const std::vector<do
     f.source = values[0];
     std::ifstream sceneFile(dir / "scene.json");
     const json scene = sceneFile ? json::parse(sceneFile, nullptr, false) : json();
-    if (scene.is_object() && scene.contains("tip_mm") && scene["tip_mm"].is_array() && scene["tip_mm"].size() == 3)
-      f.tipMm = drr::Vec3{scene["tip_mm"][0].get<double>(), scene["tip_mm"][1].get<double>(), scene["tip_mm"][2].get<double>()};
+    const json tip = scene.is_object() && scene.contains("tip_mm") ? scene["tip_mm"] : json();
+    if (tip.is_array() && tip.size() == 3 && tip[0].is_number() && tip[1].is_number() && tip[2].is_number())
+      f.tipMm = drr::Vec3{tip[0].get<double>(), tip[1].get<double>(), tip[2].get<double>()};
   } else {
     f.paths = values;
     f.source = "list";
