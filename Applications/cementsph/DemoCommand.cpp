@@ -2,11 +2,13 @@
 // Data/foam-phantom (made by `cementsph phantom`), an injection with the paper's plan (its scene preset,
 // with the volume, rate, viscosity and tip the phantom's post scan was made with, read from truth.json),
 // then the comparison against the phantom's post-injection CT (registration, segmentation, surfaces,
-// metrics, pictures) and the tip-pressure plot. It runs the `inject` and `compare` subcommands
-// themselves, so the demo is exactly what a user gets from them.
+// metrics, pictures), the X-ray sequences of the simulation and of the experiment (its pre- and registered
+// post-injection CTs as the first and last frames; paper Fig. 12) and the tip-pressure plot (Fig. 10).
+// It runs the `inject`, `compare` and `xray` subcommands themselves, so the demo is exactly what a user
+// gets from them. DIR/metrics.json gathers the headline figures of the three.
 #include "CommandRegistry.h"
 
-#include "cementsph/rendering/TipPressurePlot.h"
+#include "cementsph/imaging/AtomicFile.h"
 
 #include <nlohmann/json.hpp>
 
@@ -29,17 +31,18 @@ struct DemoOptions {
   int threads = 0;
 };
 
-// Runs a registered subcommand with the given arguments, as if typed after `cementsph NAME`.
-int runSubcommand(const std::string& name, std::vector<std::string> args) {
-  for (const auto& command : CommandRegistry::commands()) {
-    if (command.name != name) continue;
-    CLI::App sub{command.summary, name};
-    const auto runner = command.setup(sub);
-    std::reverse(args.begin(), args.end()); // CLI11 takes a vector in reverse order
-    sub.parse(args);
-    return runner();
-  }
-  throw std::logic_error("demo: no subcommand '" + name + "'");
+nlohmann::json readJson(const fs::path& path) {
+  std::ifstream in(path);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw std::runtime_error(path.string() + ": missing or not JSON");
+  return j;
+}
+
+std::string number(double x) {
+  std::ostringstream s;
+  s.precision(17);
+  s << x;
+  return s.str();
 }
 
 std::string vec3(const nlohmann::json& v) {
@@ -61,36 +64,77 @@ int runDemo(const DemoOptions& o) {
   const fs::path out(o.out);
   const std::string threads = std::to_string(o.threads);
 
-  std::cerr << "demo 1/3: injecting " << plan.at("volume_ml").get<double>() << " ml at "
+  // Exit status 3 from a step means a picture failed but its numbers are written: go on, report it at the end.
+  int status = 0;
+  auto step = [&status](int rc) {
+    if (rc == 3) status = 3;
+    return rc == 0 || rc == 3;
+  };
+
+  std::cerr << "demo 1/4: injecting " << plan.at("volume_ml").get<double>() << " ml at "
             << plan.at("flow_rate_ml_per_s").get<double>() << " ml/s, " << plan.at("viscosity_pa_s").get<double>()
-            << " Pa.s into the foam phantom (paper's plan)\n";
-  int rc = runSubcommand("inject", {"--ct", (phantom / "pre.nrrd").string(), "--scene",
+            << " Pa.s into the foam phantom (paper's plan), with a simulated CT every second\n";
+  int rc = CommandRegistry::run("inject", {"--ct", (phantom / "pre.nrrd").string(), "--scene",
                                     (fs::path(o.dataDir) / "scenes" / "paper.json").string(), "--tip-mm", tip,
                                     "--volume-ml", std::to_string(plan.at("volume_ml").get<double>()),
                                     "--flow-rate-ml-per-s", std::to_string(plan.at("flow_rate_ml_per_s").get<double>()),
                                     "--viscosity-pa-s", std::to_string(plan.at("viscosity_pa_s").get<double>()),
+                                    "--set", "simulated_ct_snapshots=true",
                                     "--threads", threads, "--out", (out / "inject").string()});
-  if (rc != 0) return rc;
+  if (!step(rc)) return rc;
+  const nlohmann::json injectMetrics = readJson(out / "inject" / "metrics.json");
 
-  std::cerr << "demo 2/3: comparing with the phantom's post-injection CT\n";
-  rc = runSubcommand("compare", {"--pre", (phantom / "pre.nrrd").string(), "--post", (phantom / "post.nrrd").string(),
+  std::cerr << "demo 2/4: comparing with the phantom's post-injection CT\n";
+  rc = CommandRegistry::run("compare", {"--pre", (phantom / "pre.nrrd").string(), "--post", (phantom / "post.nrrd").string(),
                                  "--simulated", (out / "inject" / "simulated_ct.nrrd").string(),
                                  "--injection-point-mm", tip, "--out", (out / "compare").string()});
-  if (rc != 0) return rc;
+  if (!step(rc)) return rc;
+  const nlohmann::json compareMetrics = readJson(out / "compare" / "metrics.json");
 
-  std::cerr << "demo 3/3: tip pressure plot\n";
-  cementsph::rendering::writeTipPressurePlot(out / "inject" / "tip_pressure.csv", out / "tip_pressure.png");
+  // The experiment's X-ray sequence has two frames: the pre-injection CT (t = 0) and the registered
+  // post-injection CT, taken as the frame at the end of the injection (the simulation's last frame).
+  std::cerr << "demo 3/4: X-ray sequences (Fig. 12): the simulation's frames and the post-injection CT's\n";
+  const double endS = injectMetrics.at("simulated_time_s").get<double>();
+  rc = CommandRegistry::run("xray", {"--sequence", (out / "inject").string(), "--reference",
+                                     (phantom / "pre.nrrd").string() + "," + (out / "compare" / "registered_post.nrrd").string(),
+                                     "--reference-times-s", "0," + number(endS), "--threads", threads, "--out",
+                                     (out / "xray").string()});
+  if (!step(rc)) return rc;
+  const nlohmann::json xray = readJson(out / "xray" / "metrics.json");
+
+  std::cerr << "demo 4/4: summary\n";
+  std::error_code ec;
+  fs::copy_file(out / "inject" / "tip_pressure.png", out / "tip_pressure.png", fs::copy_options::overwrite_existing, ec);
+  if (ec) {
+    std::cerr << "cementsph demo: picture tip_pressure.png not copied: " << ec.message() << "\n";
+    status = 3;
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "demo done in " << wall << " s: " << (out / "compare" / "metrics.json").string() << ", "
+  nlohmann::json metrics;
+  auto pick = [](const nlohmann::json& from, std::initializer_list<const char*> keys) {
+    nlohmann::json j;
+    for (const char* k : keys) j[k] = from.contains(k) ? from[k] : nlohmann::json(nullptr);
+    return j;
+  };
+  metrics["inject"] = pick(injectMetrics, {"volume_injected_ml", "simulated_time_s", "wall_time_s", "real_time_factor",
+                                           "max_tip_pressure_pa", "mean_spreading_distance_mm"});
+  metrics["compare"] = pick(compareMetrics, {"error_mm", "hausdorff95_mm", "dice", "jaccard", "cement_volume_ml"});
+  metrics["xray"] = pick(xray, {"final_time_s", "final_projected_area_mm2", "final_reference_projected_area_mm2"});
+  const nlohmann::json& finalFrame = xray.at("final_frame");
+  metrics["xray"]["final_frame_dice"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("dice");
+  metrics["xray"]["final_frame_iou"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("iou");
+  metrics["wall_time_s"] = wall;
+  cementsph::imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
+  std::cout << "demo done in " << wall << " s: " << (out / "metrics.json").string() << ", "
             << (out / "compare" / "surfaces.png").string() << ", " << (out / "compare" / "slices.png").string()
-            << ", " << (out / "tip_pressure.png").string() << "; particles for ParaView: "
-            << (out / "inject" / "particles.pvd").string() << "\n";
-  return 0;
+            << ", " << (out / "xray" / "xray_frames.png").string() << ", " << (out / "tip_pressure.png").string()
+            << "; particles for ParaView: " << (out / "inject" / "particles.pvd").string() << "\n";
+  return status;
 }
 
 cementsph::app::CommandRunner setupDemo(CLI::App& sub) {
   auto o = std::make_shared<DemoOptions>();
-  sub.add_option("--out", o->out, "output folder (inject/, compare/, tip_pressure.png)")->capture_default_str();
+  sub.add_option("--out", o->out, "output folder (inject/, compare/, xray/, metrics.json, tip_pressure.png)")->capture_default_str();
   sub.add_option("--data-dir", o->dataDir, "folder holding foam-phantom/ and scenes/")->capture_default_str();
   sub.add_option("--threads", o->threads, "OpenMP threads for the injection (0: all cores)");
   return [o] { return runDemo(*o); };

@@ -1,8 +1,13 @@
 // cementsph inject: an injection simulation in a CT (Basafa et al. 2013, "Simulations"). The CT's voxels
 // above threshold_hu near the pores become fixed particles; cement is emitted at the cannula tip until the
 // scene's volume is in. Writes DIR/metrics.json, tip_pressure.csv, particles_NNNN.vtp + particles.pvd,
-// simulated_ct.nrrd and scene.json (Modules/Simulation/CTScene/.../InjectionRunner.h; docs/scene-figures.md).
+// simulated_ct.nrrd and scene.json (Modules/Simulation/CTScene/.../InjectionRunner.h; docs/scene-figures.md),
+// then the pictures that fit an injection: tip_pressure.png (paper Fig. 10) and, when the scene key
+// simulated_ct_snapshots is on, the X-ray sequence of the snapshots in DIR/xray (`cementsph xray`, Fig. 12).
+// A failed picture is one line on stderr and exit status 3 (the numbers are written), as in `compare`.
 #include "CommandRegistry.h"
+
+#include "cementsph/rendering/TipPressurePlot.h"
 
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
@@ -14,6 +19,8 @@
 
 #include <omp.h>
 
+#include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -28,6 +35,7 @@ struct InjectArgs {
   std::string preset;
   int threads = 0;
   bool quiet = false;
+  bool noPictures = false;
 };
 
 std::string number(double x) {
@@ -52,6 +60,9 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   sub.add_option("--preset", a->preset, "Override the model preset (default, paper)");
   sub.add_option("--threads", a->threads, "OpenMP threads (0: the OpenMP default)");
   sub.add_flag("--quiet", a->quiet, "No progress line");
+  sub.add_flag("--no-pictures", a->noPictures,
+               "Do not write tip_pressure.png (Fig. 10) nor, with simulated_ct_snapshots, the X-ray sequence "
+               "in DIR/xray (Fig. 12)");
   return [a, &sub]() {
     // Flags given on the command line override the scene file (and --set), in this order.
     std::vector<std::string> overrides = a->set;
@@ -79,7 +90,28 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
               << "); " << m["fluid_particles"] << " fluid, " << m["fixed_particles"] << " fixed particles ("
               << m["solid_voxels_kept"] << " of " << m["solid_voxels_total"] << " solid voxels kept); "
               << m["escaped_particles"] << " left the region; results in " << a->out << "\n";
-    return 0;
+    if (a->noPictures) return 0;
+    int status = 0;
+    auto picture = [&](const std::string& name, const std::function<void()>& draw) {
+      try {
+        draw();
+      } catch (const std::exception& e) {
+        std::cerr << "cementsph inject: picture " << name << " not written (the numbers are): " << e.what() << "\n";
+        status = 3;
+      }
+    };
+    const std::filesystem::path out(a->out);
+    picture("tip_pressure.png", [&] {
+      cementsph::rendering::writeTipPressurePlot(out / "tip_pressure.csv", out / "tip_pressure.png");
+      std::cout << "wrote " << (out / "tip_pressure.png").string() << "\n";
+    });
+    if (scene.simulatedCtSnapshots)
+      picture("xray/", [&] {
+        const std::vector<std::string> args{"--sequence", a->out, "--out", (out / "xray").string(), "--threads",
+                                            std::to_string(a->threads)};
+        if (cementsph::app::CommandRegistry::run("xray", args) != 0) throw std::runtime_error("see the lines above");
+      });
+    return status;
   };
 }
 

@@ -10,6 +10,7 @@
 #include <exception>
 #include <iostream>
 #include <map>
+#include <stdexcept>
 
 namespace cementsph::app {
 
@@ -21,6 +22,18 @@ std::vector<Command>& CommandRegistry::commands() {
 bool CommandRegistry::add(Command command) {
   commands().push_back(std::move(command));
   return true;
+}
+
+int CommandRegistry::run(const std::string& name, std::vector<std::string> args) {
+  for (const auto& command : commands()) {
+    if (command.name != name) continue;
+    CLI::App sub{command.summary, name};
+    const auto runner = command.setup(sub);
+    std::reverse(args.begin(), args.end()); // CLI11 takes a vector in reverse order
+    sub.parse(args);
+    return runner();
+  }
+  throw std::logic_error("no subcommand '" + name + "'");
 }
 
 } // namespace cementsph::app

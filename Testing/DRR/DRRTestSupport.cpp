@@ -87,15 +87,7 @@ std::array<double, 3> Drr::moments() const {
 Drr project(vtkImageData* volume, const drr::DRRGeometry& g, int threads) {
   vtkNew<vtkDRRFilter> f;
   f->SetInputData(volume);
-  f->SetSourceAxisDistance(g.sadMm);
-  f->SetSourceImageDistance(g.sidMm);
-  f->SetDetectorRows(g.rows);
-  f->SetDetectorColumns(g.cols);
-  f->SetDetectorHeight(g.heightMm);
-  f->SetDetectorWidth(g.widthMm);
-  f->SetIsocenter(g.isocenterMm[0], g.isocenterMm[1], g.isocenterMm[2]);
-  f->SetGantryAngle(g.gantryAngleDeg);
-  f->SetParallelBeam(g.parallel);
+  f->SetGeometry(g);
   f->SetNumberOfThreads(threads);
   f->Update();
   EXPECT_EQ(f->GetErrorCode(), 0u);

@@ -22,32 +22,19 @@
 #include <iostream>
 
 using namespace cementsph::rendering;
+using cementsph::rendering::test::expectMatchesBaseline;
 using cementsph::rendering::test::forgetDisplay;
+using cementsph::rendering::test::kBaselineDir;
 using cementsph::rendering::test::scratchFolder;
 using cementsph::rendering::test::summarisePng;
 
 namespace {
 
-const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
 
 // GL pictures (surfaces, plot): fraction of visibly changed pixels allowed (imageDifference). Re-rendering
 // on the same stack gives 0; 1e-3 of a 1500 x 560 picture is 840 pixels, room for shading differences of
 // another Mesa at silhouette edges. Moving the simulated surface by 1.5 mm changes far more (see below).
 constexpr double kGlTolerance = 1e-3;
-
-void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName,
-                           double tolerance) {
-  const std::filesystem::path baseline = kBaselineDir / baselineName;
-  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
-    std::filesystem::create_directories(kBaselineDir);
-    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
-    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
-  }
-  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
-  const double difference = imageDifference(rendered, baseline);
-  std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
-  EXPECT_LE(difference, tolerance) << rendered << " differs from " << baseline;
-}
 
 void expectNotBlank(const std::filesystem::path& png, int width, int height, std::size_t minColours) {
   const auto s = summarisePng(png);

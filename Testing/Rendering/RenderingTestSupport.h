@@ -1,6 +1,8 @@
 // Helpers shared by the rendering tests: a scratch folder per test and a look at a PNG's pixels.
 #pragma once
 
+#include "cementsph/rendering/ImageCompare.h"
+
 #include <gtest/gtest.h>
 
 #include <vtkImageData.h>
@@ -11,6 +13,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <set>
 #include <string>
 #include <tuple>
@@ -61,5 +64,26 @@ inline PngSummary summarisePng(const std::filesystem::path& png) {
   s.nonWhiteFraction = static_cast<double>(nonWhite) / static_cast<double>(pixels->GetNumberOfTuples());
   return s;
 }
+
+#ifdef CEMENTSPH_BASELINE_DIR
+inline const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
+
+// The rendered PNG against Testing/Data/Baselines/<baselineName>: at most `tolerance` of the pixels may
+// differ visibly (imageDifference). With CEMENTSPH_UPDATE_BASELINES set, the baseline is rewritten instead
+// and the test is skipped (look at the picture before committing it).
+inline void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName,
+                                  double tolerance) {
+  const std::filesystem::path baseline = kBaselineDir / baselineName;
+  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
+    std::filesystem::create_directories(kBaselineDir);
+    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
+    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
+  }
+  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
+  const double difference = imageDifference(rendered, baseline);
+  std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
+  EXPECT_LE(difference, tolerance) << rendered << " differs from " << baseline;
+}
+#endif
 
 } // namespace cementsph::rendering::test

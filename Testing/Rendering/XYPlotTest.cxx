@@ -12,7 +12,9 @@
 #include <limits>
 
 using namespace cementsph::rendering;
+using cementsph::rendering::test::expectMatchesBaseline;
 using cementsph::rendering::test::forgetDisplay;
+using cementsph::rendering::test::kBaselineDir;
 using cementsph::rendering::test::scratchFolder;
 using cementsph::rendering::test::summarisePng;
 
@@ -23,8 +25,6 @@ namespace {
 // shifts of text or lines from another Mesa/FreeType version do not count at all; moving a few markers
 // (DifferentPlotDoesNotMatchBaseline) changes several times more.
 constexpr double kBaselineTolerance = 2e-4;
-
-const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
 
 PlotSpec basicSpec() {
   PlotSpec spec;
@@ -52,20 +52,6 @@ PlotSpec basicSpec() {
   return spec;
 }
 
-// Compares with a baseline, or (CEMENTSPH_UPDATE_BASELINES=1) replaces the baseline with the rendering.
-void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName) {
-  const std::filesystem::path baseline = kBaselineDir / baselineName;
-  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
-    std::filesystem::create_directories(kBaselineDir);
-    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
-    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
-  }
-  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
-  const double difference = imageDifference(rendered, baseline);
-  EXPECT_LE(difference, kBaselineTolerance) << rendered << " differs from " << baseline;
-  std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
-}
-
 void expectNotBlank(const std::filesystem::path& png, int width, int height) {
   const auto s = summarisePng(png);
   EXPECT_EQ(s.width, width);
@@ -86,7 +72,7 @@ TEST(XYPlot, BasicPlotMatchesBaseline) {
   const auto png = scratchFolder() / "xyplot_basic.png";
   writePlotPng(basicSpec(), png);
   expectNotBlank(png, 900, 650);
-  expectMatchesBaseline(png, "xyplot_basic.png");
+  expectMatchesBaseline(png, "xyplot_basic.png", kBaselineTolerance);
 }
 
 // Guards the comparison itself: if this passed, the baseline test would prove nothing.

@@ -1,7 +1,9 @@
 #include "cementsph/drr/DRRGeometry.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace cementsph::drr {
 
@@ -82,6 +84,33 @@ std::array<double, 2> DRRGeometry::project(const Vec3& pointMm) const {
   const double magnification = parallel ? 1.0 : sidMm / (sadMm + dot(rel, b));
   return {0.5 * (cols - 1) + dot(rel, u) * magnification / pixelWidthMm(),
           0.5 * (rows - 1) + dot(rel, up) * magnification / pixelHeightMm()};
+}
+
+void DRRGeometry::fitDetectorTo(const std::array<double, 6>& b, double margin) {
+  if (!(margin >= 1.0) || !std::isfinite(margin)) throw std::invalid_argument("fitDetectorTo: margin must be >= 1");
+  for (int a = 0; a < 3; ++a)
+    if (!(b[2 * a + 1] >= b[2 * a]) || !std::isfinite(b[2 * a]) || !std::isfinite(b[2 * a + 1]))
+      throw std::invalid_argument("fitDetectorTo: the bounding box is empty or not finite");
+  const Vec3 beam = beamDirection(), u = horizontalAxis(), up = verticalAxis();
+  // A perspective projection maps the box onto the convex hull of its projected corners, so the
+  // corners give the half-extents the detector needs on each side of its centre.
+  double halfU = 0.0, halfV = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner{b[(c & 1) ? 1 : 0], b[(c & 2) ? 3 : 2], b[(c & 4) ? 5 : 4]};
+    const Vec3 rel{corner[0] - isocenterMm[0], corner[1] - isocenterMm[1], corner[2] - isocenterMm[2]};
+    double m = 1.0;
+    if (!parallel) {
+      const double distance = sadMm + dot(rel, beam); // from the source along the beam
+      if (!(distance > 0.0)) throw std::invalid_argument("fitDetectorTo: the box reaches behind the source");
+      m = sidMm / distance;
+    }
+    halfU = std::max(halfU, std::abs(dot(rel, u)) * m);
+    halfV = std::max(halfV, std::abs(dot(rel, up)) * m);
+  }
+  const double pixel = std::max(2.0 * halfU * margin / cols, 2.0 * halfV * margin / rows);
+  if (!(pixel > 0.0)) throw std::invalid_argument("fitDetectorTo: the box projects to a point");
+  widthMm = pixel * cols;
+  heightMm = pixel * rows;
 }
 
 } // namespace cementsph::drr

@@ -17,11 +17,6 @@
 
 vtkStandardNewMacro(vtkDRRFilter);
 
-namespace {
-// plastimatch divides the line integral by 10 (see vtkDRRFilter.h); kept for comparable images.
-constexpr double kPlastimatchScale = 0.1;
-} // namespace
-
 vtkDRRFilter::vtkDRRFilter() {
   this->SetNumberOfInputPorts(1);
   this->SetNumberOfOutputPorts(1);
@@ -39,6 +34,18 @@ cementsph::drr::DRRGeometry vtkDRRFilter::GetGeometry() const {
   g.gantryAngleDeg = this->GantryAngle;
   g.parallel = this->ParallelBeam;
   return g;
+}
+
+void vtkDRRFilter::SetGeometry(const cementsph::drr::DRRGeometry& g) {
+  this->SetSourceAxisDistance(g.sadMm);
+  this->SetSourceImageDistance(g.sidMm);
+  this->SetDetectorRows(g.rows);
+  this->SetDetectorColumns(g.cols);
+  this->SetDetectorHeight(g.heightMm);
+  this->SetDetectorWidth(g.widthMm);
+  this->SetIsocenter(g.isocenterMm[0], g.isocenterMm[1], g.isocenterMm[2]);
+  this->SetGantryAngle(g.gantryAngleDeg);
+  this->SetParallelBeam(g.parallel);
 }
 
 int vtkDRRFilter::RequestInformation(vtkInformation*, vtkInformationVector**,
@@ -106,7 +113,7 @@ int vtkDRRFilter::RequestData(vtkInformation*, vtkInformationVector** inputVecto
       for (int j = 0; j < g.rows; ++j) {
         float* row = pixels + static_cast<std::size_t>(j) * g.cols;
         for (int i = 0; i < g.cols; ++i)
-          row[i] = static_cast<float>(kPlastimatchScale * volume.lineIntegral(frame.ray(i, j)));
+          row[i] = static_cast<float>(kPixelScale * volume.lineIntegral(frame.ray(i, j)));
         // Progress observers may touch non-thread-safe state, so only the calling thread reports.
         int done;
 #pragma omp atomic capture

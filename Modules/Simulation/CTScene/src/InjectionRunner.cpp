@@ -4,6 +4,7 @@
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/PorousSolid.h"
+#include "cementsph/scene/SimulatedCT.h"
 #include "cementsph/sph/CannulaEmitter.h"
 #include "cementsph/sph/ParticleVoxeliser.h"
 #include "cementsph/sph/Presets.h"
@@ -134,12 +135,33 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
 
   const bool writing = !o.outDir.empty();
   if (writing) fs::create_directories(o.outDir);
+  const sph::ParticleVoxeliser voxeliser(solid.grid, 2.0 * scene.particleRadiusMm * 1e-3); // h = 2r
+  // simulated_ct_snapshots: the simulated CT at t = 0 (no cement yet: the background of an X-ray sequence)
+  // and at every particle snapshot, listed with their times in sequence.json.
+  const bool ctSnapshots = writing && scene.simulatedCtSnapshots;
+  json ctFrames = json::array();
+  double ctSnapshotWallS = 0.0;
+  auto writeCtSnapshot = [&](const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now) {
+    const auto t0 = std::chrono::steady_clock::now();
+    imaging::ImageType::Pointer made;
+    if (!now) made = simulatedCtOnRoi(ct, solid, voxeliser.density(sim.fluid()), o.huPerRelativeDensity, rho0);
+    imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(o.outDir) / ctName).string());
+    ctSnapshotWallS += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ctFrames.push_back({{"index", ctFrames.size()}, {"time_s", sim.time()}, {"simulated_ct", ctName},
+                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
+  };
+  if (ctSnapshots) writeCtSnapshot("simulated_ct_start.nrrd", "", nullptr);
   std::vector<std::pair<double, std::string>> snapshots;
-  auto writeSnapshot = [&] {
+  auto writeSnapshot = [&](const imaging::ImageType* ctNow = nullptr) {
     if (!writing) return;
     char name[64];
     std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
     imaging::writePolyData(particlesToPolyData(sim.fluid(), sim.time()), (fs::path(o.outDir) / name).string());
+    if (ctSnapshots) {
+      char ctName[64];
+      std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots.size());
+      writeCtSnapshot(ctName, name, ctNow);
+    }
     snapshots.emplace_back(sim.time(), name);
   };
 
@@ -211,33 +233,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   }
 
   // Simulated CT on the CT's grid within the ROI.
-  const sph::ParticleVoxeliser voxeliser(solid.grid, 2.0 * scene.particleRadiusMm * 1e-3); // h = 2r
-  const std::vector<double> rho = voxeliser.density(f);
-  auto simCt = imaging::ImageType::New();
-  {
-    imaging::ImageType::RegionType region;
-    imaging::ImageType::SizeType size;
-    for (unsigned a = 0; a < 3; ++a) size[a] = itk::SizeValueType(solid.roiSize[a]);
-    region.SetSize(size);
-    simCt->SetRegions(region);
-    simCt->SetSpacing(ct->GetSpacing());
-    simCt->SetDirection(ct->GetDirection());
-    imaging::ImageType::PointType origin;
-    for (unsigned a = 0; a < 3; ++a) origin[a] = solid.grid.origin[int(a)] * 1e3;
-    simCt->SetOrigin(origin);
-    simCt->Allocate();
-    const auto start = ct->GetLargestPossibleRegion().GetIndex();
-    for (int k = 0; k < solid.grid.size[2]; ++k)
-      for (int j = 0; j < solid.grid.size[1]; ++j)
-        for (int i = 0; i < solid.grid.size[0]; ++i) {
-          imaging::ImageType::IndexType src;
-          src[0] = start[0] + solid.roiStart[0] + i;
-          src[1] = start[1] + solid.roiStart[1] + j;
-          src[2] = start[2] + solid.roiStart[2] + k;
-          const double hu = double(ct->GetPixel(src)) + o.huPerRelativeDensity * rho[solid.grid.index(i, j, k)] / rho0;
-          simCt->SetPixel({{i, j, k}}, float(hu));
-        }
-  }
+  const auto simCt = simulatedCtOnRoi(ct, solid, voxeliser.density(f), o.huPerRelativeDensity, rho0);
 
   const auto& st = sim.statistics();
   json metrics;
@@ -280,7 +276,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   result.particles = particlesToPolyData(f, sim.time());
   result.simulatedCt = simCt;
   if (writing) {
-    writeSnapshot();
+    writeSnapshot(simCt);
     std::ostringstream pvd;
     pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
     for (const auto& [t, name] : snapshots)
@@ -295,6 +291,16 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
     imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
     imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");
     metrics["snapshots"] = snapshots.size();
+    if (ctSnapshots) {
+      metrics["simulated_ct_snapshots"] = ctFrames.size();
+      metrics["simulated_ct_snapshots_wall_s"] = ctSnapshotWallS; // voxelising and writing them
+      const json sequence{{"frames", ctFrames},
+                          {"final_simulated_ct", "simulated_ct.nrrd"},
+                          {"simulated_ct_hu_per_relative_density", o.huPerRelativeDensity},
+                          {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the "
+                                   "last frame is simulated_ct.nrrd"}};
+      imaging::writeTextAtomically((fs::path(o.outDir) / "sequence.json").string(), sequence.dump(2) + "\n");
+    }
     imaging::writeTextAtomically((fs::path(o.outDir) / "metrics.json").string(), metrics.dump(2) + "\n");
   }
   result.metrics = metrics;

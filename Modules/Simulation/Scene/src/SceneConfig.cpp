@@ -94,6 +94,10 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "threshold_hu") s.thresholdHu = number(v, key);
     else if (key == "roi_size_mm") s.roiSizeMm = number(v, key);
     else if (key == "snapshot_interval_s") s.snapshotIntervalS = number(v, key);
+    else if (key == "simulated_ct_snapshots") {
+      if (!v.is_boolean()) fail(key, "must be true or false");
+      s.simulatedCtSnapshots = v.get<bool>();
+    }
     else if (key == "solid_mass_factor") s.solidMassFactor = number(v, key);
     else if (key == "drag_coefficient") s.dragCoefficient = number(v, key);
     else if (key == "sound_speed_m_per_s") s.soundSpeedMPerS = number(v, key);
@@ -222,6 +226,7 @@ json toJson(const SceneConfig& s) {
   j["threshold_hu"] = s.thresholdHu;
   j["roi_size_mm"] = s.roiSizeMm;
   j["snapshot_interval_s"] = s.snapshotIntervalS;
+  j["simulated_ct_snapshots"] = s.simulatedCtSnapshots;
   j["solid_mass_factor"] = s.solidMassFactor;
   if (s.dragCoefficient) j["drag_coefficient"] = *s.dragCoefficient;
   if (s.soundSpeedMPerS) j["sound_speed_m_per_s"] = *s.soundSpeedMPerS;

@@ -54,6 +54,16 @@ struct DRRGeometry {
 
   // Continuous output pixel coordinates (i, j) where a physical point projects.
   std::array<double, 2> project(const Vec3& pointMm) const;
+
+  // Magnification of the isocentre plane onto the detector: sid / sad (1 for a parallel beam). An area at
+  // the detector times (1 / magnification)^2 is the area in the plane through the isocentre.
+  double isocentreMagnification() const { return parallel ? 1.0 : sidMm / sadMm; }
+
+  // Sets widthMm and heightMm (rows and cols unchanged, square pixels) so that the projection of the
+  // axis-aligned box boundsMm = {xmin, xmax, ymin, ymax, zmin, zmax} fits on the detector, centred, with
+  // `margin` (>= 1) times the room it needs. Throws std::invalid_argument if a corner of the box is not in
+  // front of the source, the box is empty or margin < 1.
+  void fitDetectorTo(const std::array<double, 6>& boundsMm, double margin = 1.1);
 };
 
 } // namespace cementsph::drr

@@ -18,6 +18,9 @@ class vtkDRRFilter : public vtkImageAlgorithm {
 public:
   static vtkDRRFilter* New();
   vtkTypeMacro(vtkDRRFilter, vtkImageAlgorithm)
+
+  // pixel = kPixelScale * (line integral of mu in 1/mm over mm): plastimatch's division by 10.
+  static constexpr double kPixelScale = 0.1;
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   // Source-axis and source-image distances, mm (plastimatch's defaults 1000 and 1500).
@@ -55,6 +58,8 @@ public:
 
   // The geometry the parameters describe (the filter's single source of truth for rays).
   cementsph::drr::DRRGeometry GetGeometry() const;
+  // Sets every geometry parameter at once (Modified() only if one changes).
+  void SetGeometry(const cementsph::drr::DRRGeometry& geometry);
 
 protected:
   vtkDRRFilter();

@@ -15,6 +15,11 @@
 //   simulated_ct.nrrd   the CT's grid within the ROI: HU_sim = HU_pre + k rho_fluid / rho0, rho_fluid the Eq. 2
 //                       fluid density at the voxel centre with h = 2r (ParticleVoxeliser), k = 3000 HU
 //   scene.json          the scene as run (all values resolved)
+// With the scene key simulated_ct_snapshots (SimulatedCT.h), also:
+//   simulated_ct_start.nrrd  the simulated CT at t = 0 (no cement: the CT's ROI), an X-ray sequence's background
+//   simulated_ct_NNNN.nrrd   at each particles_NNNN.vtp (same numbering; the last equals simulated_ct.nrrd)
+//   sequence.json            {"frames": [{"index", "time_s", "simulated_ct", "particles" (null at t = 0)}, ...]}
+//   metrics.json then holds simulated_ct_snapshots (frames written) and simulated_ct_snapshots_wall_s (their cost)
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"

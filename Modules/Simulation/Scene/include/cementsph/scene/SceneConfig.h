@@ -17,6 +17,10 @@
 //   threshold_hu                    solid where HU > threshold                              paper 0
 //   roi_size_mm                     edge of the cube about the tip that is modelled         paper 40
 //   snapshot_interval_s                                                                     1
+//   simulated_ct_snapshots (bool)   also write simulated_ct_NNNN.nrrd at every particle snapshot false
+//                                   (same numbering as particles_NNNN.vtp), simulated_ct_start.nrrd
+//                                   at t = 0 (no cement: the background of X-ray sequences, paper
+//                                   Fig. 12) and sequence.json listing them with their times
 //   solid_mass_factor               fixed particle mass = factor rho0 V_voxel (> 0)          8
 //                                   (ours, not the paper's: at factor 1 the compressed cloud, ~1.4 kPa against
 //                                   rho0 cs^2 = 1.18 kPa, entered the solid; docs/scene-figures.md)
@@ -61,6 +65,7 @@ struct SceneConfig {
   double thresholdHu = 0.0;
   double roiSizeMm = 40.0;
   double snapshotIntervalS = 1.0;
+  bool simulatedCtSnapshots = false;
   double solidMassFactor = 8.0;
   std::optional<double> dragCoefficient;
   std::optional<double> soundSpeedMPerS;

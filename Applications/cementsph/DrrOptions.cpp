@@ -1,0 +1,81 @@
+#include "DrrOptions.h"
+
+#include "cementsph/imaging/AtomicFile.h"
+
+#include <vtkDataArray.h>
+#include <vtkImageData.h>
+#include <vtkImageShiftScale.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkPointData.h>
+
+#include <stdexcept>
+
+namespace cementsph::app {
+
+void addDrrGeometryOptions(CLI::App& sub, DrrGeometryArgs& a, const std::string& sizeHelp) {
+  auto& g = a.geometry;
+  sub.add_option("--sad-mm", g.sadMm, "Source-axis distance, mm")->capture_default_str();
+  sub.add_option("--sid-mm", g.sidMm, "Source-image (detector) distance, mm")->capture_default_str();
+  sub.add_option("--detector-pixels", a.pixels, "Detector resolution in pixels: rows,cols")
+      ->delimiter(',')
+      ->expected(2)
+      ->capture_default_str();
+  a.sizeOption = sub.add_option("--detector-size-mm", a.sizeMm, sizeHelp)->delimiter(',')->expected(2);
+  sub.add_option("--isocenter-mm", a.isocenterMm,
+                 "Isocentre in the volume's physical coordinates, mm: x,y,z (default: the volume's centre)")
+      ->delimiter(',')
+      ->expected(3);
+  sub.add_option("--gantry-angle-deg", g.gantryAngleDeg,
+                 "Gantry angle about z, degrees (0: source on +x, 90: source on -y; plastimatch's sense)")
+      ->capture_default_str();
+  sub.add_flag("--parallel", g.parallel, "Parallel beam along the beam axis (sad/sid unused)");
+  sub.add_option("--threads", a.threads, "OpenMP threads (0: OpenMP's default)")->capture_default_str();
+}
+
+drr::DRRGeometry checkedGeometry(const DrrGeometryArgs& a) {
+  if (a.threads < 0) throw std::runtime_error("--threads must be 0 or more");
+  drr::DRRGeometry g = a.geometry;
+  g.rows = a.pixels[0];
+  g.cols = a.pixels[1];
+  g.heightMm = a.sizeMm[0];
+  g.widthMm = a.sizeMm[1];
+  if (const std::string problem = g.validate(); !problem.empty()) throw std::runtime_error(problem);
+  return g;
+}
+
+drr::DRRGeometry geometryForVolume(const DrrGeometryArgs& a, const std::array<double, 6>& b, bool fitDetector) {
+  drr::DRRGeometry g = checkedGeometry(a);
+  if (a.isocenterMm.empty())
+    g.isocenterMm = {0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5])};
+  else
+    g.isocenterMm = {a.isocenterMm[0], a.isocenterMm[1], a.isocenterMm[2]};
+  try {
+    if (fitDetector) g.fitDetectorTo(b, 1.1);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("cannot fit the detector to the volume: ") + e.what());
+  }
+  if (const std::string problem = g.validate(); !problem.empty()) throw std::runtime_error(problem);
+  return g;
+}
+
+void writeDrrPng(vtkImageData* drr, const std::string& path, double windowMax) {
+  double range[2];
+  drr->GetPointData()->GetScalars()->GetRange(range, 0);
+  const double top = windowMax > 0.0 ? windowMax : range[1];
+  vtkNew<vtkImageShiftScale> toBytes;
+  toBytes->SetInputData(drr);
+  toBytes->SetShift(0.0);
+  toBytes->SetScale(top > 0.0 ? 255.0 / top : 0.0);
+  toBytes->SetOutputScalarTypeToUnsignedChar();
+  toBytes->ClampOverflowOn();
+  imaging::writeAtomically(path, [&](const std::string& tmp) {
+    vtkNew<vtkPNGWriter> writer;
+    writer->SetInputConnection(toBytes->GetOutputPort());
+    writer->SetFileName(tmp.c_str());
+    writer->Write();
+    if (writer->GetErrorCode() != 0) throw std::runtime_error("PNG writer failed");
+  });
+}
+
+} // namespace cementsph::app
