@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "cementsph/rendering/ImageCompare.h"
+
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
@@ -11,6 +13,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <set>
 #include <string>
 #include <tuple>
@@ -60,6 +63,22 @@ inline PngSummary summarisePng(const std::filesystem::path& png) {
   s.distinctColours = colours.size();
   s.nonWhiteFraction = static_cast<double>(nonWhite) / static_cast<double>(pixels->GetNumberOfTuples());
   return s;
+}
+
+// Compares a rendering with the baseline baselineDir/baselineName (imageDifference <= tolerance), or, with
+// CEMENTSPH_UPDATE_BASELINES set, replaces the baseline with the rendering and skips the test.
+inline void expectMatchesBaseline(const std::filesystem::path& rendered, const std::filesystem::path& baselineDir,
+                                  const std::string& baselineName, double tolerance) {
+  const std::filesystem::path baseline = baselineDir / baselineName;
+  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
+    std::filesystem::create_directories(baselineDir);
+    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
+    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
+  }
+  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
+  const double difference = cementsph::rendering::imageDifference(rendered, baseline);
+  std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
+  EXPECT_LE(difference, tolerance) << rendered << " differs from " << baseline;
 }
 
 } // namespace cementsph::rendering::test
