@@ -54,16 +54,7 @@ PlotSpec basicSpec() {
 
 // Compares with a baseline, or (CEMENTSPH_UPDATE_BASELINES=1) replaces the baseline with the rendering.
 void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName) {
-  const std::filesystem::path baseline = kBaselineDir / baselineName;
-  if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
-    std::filesystem::create_directories(kBaselineDir);
-    std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
-    GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
-  }
-  ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
-  const double difference = imageDifference(rendered, baseline);
-  EXPECT_LE(difference, kBaselineTolerance) << rendered << " differs from " << baseline;
-  std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
+  cementsph::rendering::test::expectMatchesBaseline(rendered, kBaselineDir, baselineName, kBaselineTolerance);
 }
 
 void expectNotBlank(const std::filesystem::path& png, int width, int height) {
