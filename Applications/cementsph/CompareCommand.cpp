@@ -14,6 +14,8 @@
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/rendering/SliceComparison.h"
 #include "cementsph/rendering/SurfaceComparison.h"
+#include "cementsph/study/AlignedPost.h"
+#include "cementsph/study/AnalysedCement.h"
 #include "cementsph/surfacemetrics/Isosurface.h"
 #include "cementsph/surfacemetrics/SurfaceDistance.h"
 #include "cementsph/surfacemetrics/VolumeMetrics.h"
@@ -50,30 +52,8 @@ struct CompareArgs {
   bool noPictures = false;
 };
 
-// One segmented cement: mask, its VTK copy, its surface and volume metrics.
-struct Cement {
-  SegmentationResult segmentation;
-  vtkSmartPointer<vtkImageData> vtkMask;
-  vtkSmartPointer<vtkPolyData> surface;
-  double spreadingMm = 0.0;
-  sm::Point3 centroid{0, 0, 0};
-  bool found() const { return segmentation.voxels > 0; }
-};
-
-Cement analyse(const ImageType* volume, const ImageType* pre, const SegmentationOptions& options,
-               const sm::Point3& injection, double smoothingVoxels) {
-  Cement c;
-  c.segmentation = segmentCement(volume, pre, options);
-  c.vtkMask = toVtk(c.segmentation.mask.GetPointer());
-  if (c.found()) {
-    c.spreadingMm = sm::meanSpreadingDistanceMm(c.vtkMask, injection);
-    c.centroid = sm::centroidMm(c.vtkMask);
-    sm::IsosurfaceOptions iso;
-    iso.smoothingSigmaVoxels = smoothingVoxels;
-    c.surface = sm::isosurface(c.vtkMask, iso);
-  }
-  return c;
-}
+// One segmented cement (shared with `study`, so both measure a simulated CT alike).
+using Cement = cementsph::study::AnalysedCement;
 
 json cementJson(const Cement& c) {
   json j;
@@ -156,19 +136,13 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
 
     // 2. Register POST onto PRE and resample it onto PRE's grid.
     t = std::chrono::steady_clock::now();
-    std::optional<RegistrationResult> registration;
-    ImageType::Pointer registered;
+    RegistrationOptions registrationOptions;
+    registrationOptions.maskCement = !a->noCementMask;
+    cementsph::study::AlignedPost aligned =
+        cementsph::study::alignPostOntoPre(pre, post, !a->noRegistration, registrationOptions);
+    const std::optional<RegistrationResult>& registration = aligned.registration;
+    const ImageType::Pointer registered = aligned.volume;
     auto identity = itk::IdentityTransform<double, 3>::New();
-    if (a->noRegistration) {
-      if (overlapVolumeMm3(geometryOf(pre), geometryOf(post)) <= 0.0)
-        throw std::runtime_error("the pre and post volumes do not overlap in space");
-      registered = resampleOnto(post, pre, identity);
-    } else {
-      RegistrationOptions options;
-      options.maskCement = !a->noCementMask;
-      registration = registerAffine(pre, post, options);
-      registered = resampleOnto(post, pre, registration->transform);
-    }
     timing["registration_s"] = seconds(t);
     if (simulated && !geometryOf(simulated).sameGrid(geometryOf(pre))) {
       if (overlapVolumeMm3(geometryOf(pre), geometryOf(simulated)) <= 0.0)
@@ -183,9 +157,9 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
     seg.injectionPointMm = injectionPoint;
     seg.injectionSearchRadiusMm = a->searchRadiusMm;
     seg.closingRadiusMm = a->closingMm;
-    const Cement ct = analyse(registered, pre, seg, injection, a->smoothingVoxels);
+    const Cement ct = cementsph::study::analyseCement(registered, pre, seg, injection, a->smoothingVoxels);
     std::optional<Cement> sim;
-    if (simulated) sim = analyse(simulated, pre, seg, injection, a->smoothingVoxels);
+    if (simulated) sim = cementsph::study::analyseCement(simulated, pre, seg, injection, a->smoothingVoxels);
     timing["segmentation_s"] = seconds(t);
 
     json metrics;

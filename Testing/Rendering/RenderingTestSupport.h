@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "cementsph/rendering/ImageCompare.h"
+
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
@@ -65,24 +67,30 @@ inline PngSummary summarisePng(const std::filesystem::path& png) {
   return s;
 }
 
-#ifdef CEMENTSPH_BASELINE_DIR
-inline const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
-
-// The rendered PNG against Testing/Data/Baselines/<baselineName>: at most `tolerance` of the pixels may
-// differ visibly (imageDifference). With CEMENTSPH_UPDATE_BASELINES set, the baseline is rewritten instead
-// and the test is skipped (look at the picture before committing it).
-inline void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName,
-                                  double tolerance) {
-  const std::filesystem::path baseline = kBaselineDir / baselineName;
+// Compares a rendering with the baseline baselineDir/baselineName (imageDifference <= tolerance), or, with
+// CEMENTSPH_UPDATE_BASELINES set, replaces the baseline with the rendering and skips the test (look at
+// the picture before committing it).
+inline void expectMatchesBaseline(const std::filesystem::path& rendered, const std::filesystem::path& baselineDir,
+                                  const std::string& baselineName, double tolerance) {
+  const std::filesystem::path baseline = baselineDir / baselineName;
   if (std::getenv("CEMENTSPH_UPDATE_BASELINES") != nullptr) {
-    std::filesystem::create_directories(kBaselineDir);
+    std::filesystem::create_directories(baselineDir);
     std::filesystem::copy_file(rendered, baseline, std::filesystem::copy_options::overwrite_existing);
     GTEST_SKIP() << "baseline " << baseline << " rewritten; inspect it before committing";
   }
   ASSERT_TRUE(std::filesystem::exists(baseline)) << baseline;
-  const double difference = imageDifference(rendered, baseline);
+  const double difference = cementsph::rendering::imageDifference(rendered, baseline);
   std::cout << "difference from baseline " << baselineName << ": " << difference << "\n";
   EXPECT_LE(difference, tolerance) << rendered << " differs from " << baseline;
+}
+
+#ifdef CEMENTSPH_BASELINE_DIR
+inline const std::filesystem::path kBaselineDir = CEMENTSPH_BASELINE_DIR;
+
+// The same against Testing/Data/Baselines/<baselineName>.
+inline void expectMatchesBaseline(const std::filesystem::path& rendered, const std::string& baselineName,
+                                  double tolerance) {
+  expectMatchesBaseline(rendered, kBaselineDir, baselineName, tolerance);
 }
 #endif
 

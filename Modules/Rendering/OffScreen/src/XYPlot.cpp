@@ -5,23 +5,89 @@
 #include <vtkAxis.h>
 #include <vtkChartLegend.h>
 #include <vtkChartXY.h>
+#include <vtkContext2D.h>
 #include <vtkContextScene.h>
 #include <vtkContextView.h>
 #include <vtkDoubleArray.h>
+#include <vtkMatrix3x3.h>
 #include <vtkPlot.h>
+#include <vtkPlotLine.h>
 #include <vtkPlotPoints.h>
 #include <vtkRenderer.h>
 #include <vtkSmartPointer.h>
 #include <vtkTable.h>
 #include <vtkTextProperty.h>
+#include <vtkTransform2D.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
 namespace cementsph::rendering {
 namespace {
+
+// Draws labels[i] beside the data point (x[i], y[i]), offset by a few pixels.
+// toPlot maps data coordinates to the plot's (vtkPlot::TransformDataToScreen, protected there).
+void paintPointLabels(vtkContext2D* painter, vtkPlot* plot, const std::vector<std::string>& labels,
+                      const std::vector<double>& x, const std::vector<double>& y,
+                      const std::function<void(double, double, double&, double&)>& toPlot) {
+  vtkMatrix3x3* m = painter->GetTransform()->GetMatrix();
+  const double sx = m->GetElement(0, 0) != 0 ? m->GetElement(0, 0) : 1.0; // pixels per plot unit
+  const double sy = m->GetElement(1, 1) != 0 ? m->GetElement(1, 1) : 1.0;
+  vtkTextProperty* text = painter->GetTextProp();
+  text->SetFontSize(13);
+  text->SetBold(false);
+  text->SetItalic(false);
+  text->SetJustificationToLeft();
+  text->SetVerticalJustificationToBottom();
+  unsigned char rgba[4];
+  plot->GetColor(rgba);
+  text->SetColor(rgba[0] / 255.0, rgba[1] / 255.0, rgba[2] / 255.0);
+  for (std::size_t i = 0; i < labels.size() && i < x.size() && i < y.size(); ++i) {
+    if (labels[i].empty()) continue;
+    double px = 0, py = 0;
+    toPlot(x[i], y[i], px, py);
+    painter->DrawString(static_cast<float>(px + 6.0 / sx), static_cast<float>(py + 4.0 / sy), labels[i]);
+  }
+}
+
+// Line and point plots that also write a text label beside each point (PlotSeries::pointLabels). VTK's
+// charts have tooltips but no static point labels; the labels are drawn in the plot's own Paint, where the
+// painter maps plot coordinates to pixels, and TransformDataToScreen applies the log axes and the chart's
+// shift and scale.
+template <class Base> class vtkLabelledPlot : public Base {
+public:
+  static vtkLabelledPlot* New() {
+    auto* plot = new vtkLabelledPlot;
+    plot->InitializeObjectBase();
+    return plot;
+  }
+  vtkTypeMacro(vtkLabelledPlot, Base)
+  std::vector<std::string> Labels;
+  std::vector<double> X, Y; // data coordinates of the labelled points
+
+  bool Paint(vtkContext2D* painter) override {
+    if (!Base::Paint(painter)) return false;
+    paintPointLabels(painter, this, Labels, X, Y,
+                     [this](double x, double y, double& px, double& py) { this->TransformDataToScreen(x, y, px, py); });
+    return true;
+  }
+
+protected:
+  vtkLabelledPlot() = default;
+  ~vtkLabelledPlot() override = default;
+};
+
+// Makes the labelled twin of the plot type AddPlot would make for this style.
+template <class Base> vtkSmartPointer<vtkPlotPoints> labelledPlot(const PlotSeries& s) {
+  auto plot = vtkSmartPointer<vtkLabelledPlot<Base>>::Take(vtkLabelledPlot<Base>::New());
+  plot->Labels = s.pointLabels;
+  plot->X = s.x;
+  plot->Y = s.y;
+  return plot;
+}
 
 std::string seriesName(const PlotSeries& s, std::size_t index) {
   return s.name.empty() ? "series #" + std::to_string(index) : "series '" + s.name + "'";
@@ -101,6 +167,10 @@ void validatePlotSpec(const PlotSpec& spec) {
       reject(who + ": x has " + std::to_string(s.x.size()) + " values but y has " + std::to_string(s.y.size()));
     }
     if (s.x.empty()) reject(who + " has no points");
+    if (!s.pointLabels.empty() && s.pointLabels.size() != s.x.size()) {
+      reject(who + ": " + std::to_string(s.pointLabels.size()) + " point labels for " + std::to_string(s.x.size()) +
+             " points");
+    }
     checkValues(s.x, "x", spec.logX, who);
     checkValues(s.y, "y", spec.logY, who);
     if (!std::isfinite(s.width) || s.width <= 0.0) reject(who + ": width " + show(s.width) + " is not positive");
@@ -147,7 +217,16 @@ void writePlotPng(const PlotSpec& spec, const std::filesystem::path& png) {
       table->SetValue(static_cast<vtkIdType>(r), 1, vtkVariant(s.y[r]));
     }
 
-    vtkPlot* plot = chart->AddPlot(s.style == PlotSeries::Style::Points ? vtkChart::POINTS : vtkChart::LINE);
+    vtkPlot* plot = nullptr;
+    if (s.pointLabels.empty()) {
+      plot = chart->AddPlot(s.style == PlotSeries::Style::Points ? vtkChart::POINTS : vtkChart::LINE);
+    } else {
+      // The same plot types as AddPlot makes, with the labels painted on top (the chart keeps a reference).
+      vtkSmartPointer<vtkPlotPoints> labelled = s.style == PlotSeries::Style::Points ? labelledPlot<vtkPlotPoints>(s)
+                                                                                     : labelledPlot<vtkPlotLine>(s);
+      chart->AddPlot(labelled);
+      plot = labelled;
+    }
     plot->SetInputData(table, 0, 1);
     plot->SetColor(s.rgb[0], s.rgb[1], s.rgb[2], 255);
     plot->SetWidth(static_cast<float>(s.width));

@@ -16,6 +16,9 @@ struct PlotSeries {
   enum class Style { Line, Points, LineAndPoints } style = Style::LineAndPoints;
   std::array<unsigned char, 3> rgb{31, 119, 180};
   double width = 2.0; // line width in pixels; also scales the markers
+  // Optional text beside each point (empty: none; else one per point, "" for an unlabelled point), drawn in
+  // the series' colour just right of and above the point, e.g. the particle radius of each run of a study.
+  std::vector<std::string> pointLabels;
 };
 
 struct PlotSpec {
@@ -28,8 +31,8 @@ struct PlotSpec {
 };
 
 // Throws std::invalid_argument (one line naming the series and the fault) for: no series, a series with
-// no points, x/y of different lengths, non-finite values, values <= 0 on a log axis, bad limits, bad
-// width/size. Throws std::runtime_error if rendering or writing fails. Either way no file is left behind.
+// no points, x/y of different lengths, point labels not one per point, non-finite values, values <= 0 on
+// a log axis, bad limits, bad width/size. Throws std::runtime_error if rendering or writing fails. Either way no file is left behind.
 void writePlotPng(const PlotSpec& spec, const std::filesystem::path& png);
 
 // The validation writePlotPng() performs, for callers that want to check a spec before doing other work.

@@ -1,0 +1,39 @@
+#include "SceneOverrides.h"
+
+#include <sstream>
+
+namespace cementsph::app {
+
+std::string exactNumber(double x) {
+  std::ostringstream s;
+  s.precision(17);
+  s << x;
+  return s.str();
+}
+
+void addSceneOverrideOptions(CLI::App& sub, SceneOverrideArgs& a) {
+  sub.add_option("--set", a.set, "Override a scene key: key=value (JSON value), repeatable");
+  sub.add_option("--tip-mm", a.tipMm, "Override tip_mm: x,y,z")->delimiter(',')->expected(3);
+  sub.add_option("--volume-ml", a.volumeMl, "Override volume_ml");
+  sub.add_option("--flow-rate-ml-per-s", a.flowRateMlPerS, "Override flow_rate_ml_per_s");
+  sub.add_option("--viscosity-pa-s", a.viscosityPaS, "Override viscosity_pa_s");
+  sub.add_option("--snapshot-interval-s", a.snapshotIntervalS, "Override snapshot_interval_s");
+  sub.add_option("--preset", a.preset, "Override the model preset (default, paper)");
+}
+
+std::vector<std::string> sceneOverrides(const CLI::App& sub, const SceneOverrideArgs& a) {
+  // Flags given on the command line override the scene file (and --set), in this order.
+  std::vector<std::string> overrides = a.set;
+  if (!a.tipMm.empty())
+    overrides.push_back("tip_mm=[" + exactNumber(a.tipMm[0]) + "," + exactNumber(a.tipMm[1]) + "," +
+                        exactNumber(a.tipMm[2]) + "]");
+  if (sub.count("--volume-ml")) overrides.push_back("volume_ml=" + exactNumber(a.volumeMl));
+  if (sub.count("--flow-rate-ml-per-s")) overrides.push_back("flow_rate_ml_per_s=" + exactNumber(a.flowRateMlPerS));
+  if (sub.count("--viscosity-pa-s")) overrides.push_back("viscosity_pa_s=" + exactNumber(a.viscosityPaS));
+  if (sub.count("--snapshot-interval-s"))
+    overrides.push_back("snapshot_interval_s=" + exactNumber(a.snapshotIntervalS));
+  if (!a.preset.empty()) overrides.push_back("preset=\"" + a.preset + "\"");
+  return overrides;
+}
+
+} // namespace cementsph::app

@@ -1,0 +1,31 @@
+// The scene-override options that subcommands running an injection share (`inject`'s flags; `study` uses
+// them through here): --set key=value (repeatable), --tip-mm, --volume-ml, --flow-rate-ml-per-s,
+// --viscosity-pa-s, --snapshot-interval-s, --preset. They are turned into "key=value" overrides
+// (SceneConfig.h, applySceneOverride) applied after the scene file: --set first, then the flags.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cementsph::app {
+
+struct SceneOverrideArgs {
+  std::vector<std::string> set;
+  std::vector<double> tipMm;
+  double volumeMl = 0, flowRateMlPerS = 0, viscosityPaS = 0, snapshotIntervalS = 0;
+  std::string preset;
+};
+
+// Declares the options on `sub`, storing into *args (which must outlive the parse).
+void addSceneOverrideOptions(CLI::App& sub, SceneOverrideArgs& args);
+
+// The overrides the command line asked for, in the order they are applied.
+std::vector<std::string> sceneOverrides(const CLI::App& sub, const SceneOverrideArgs& args);
+
+// A double written so that it reads back exactly (17 significant digits).
+std::string exactNumber(double x);
+
+} // namespace cementsph::app
