@@ -6,6 +6,7 @@
 // simulated_ct_snapshots is on, the X-ray sequence of the snapshots in DIR/xray (`cementsph xray`, Fig. 12).
 // A failed picture is one line on stderr and exit status 3 (the numbers are written), as in `compare`.
 #include "CommandRegistry.h"
+#include "SceneOverrides.h"
 
 #include "cementsph/rendering/TipPressurePlot.h"
 
@@ -23,27 +24,16 @@
 #include <functional>
 #include <iostream>
 #include <memory>
-#include <sstream>
 
 namespace {
 
 struct InjectArgs {
   std::string ct, scene, out;
-  std::vector<std::string> set;
-  std::vector<double> tipMm;
-  double volumeMl = 0, flowRateMlPerS = 0, viscosityPaS = 0, snapshotIntervalS = 0;
-  std::string preset;
+  cementsph::app::SceneOverrideArgs overrides;
   int threads = 0;
   bool quiet = false;
   bool noPictures = false;
 };
-
-std::string number(double x) {
-  std::ostringstream s;
-  s.precision(17);
-  s << x;
-  return s.str();
-}
 
 cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   auto a = std::make_shared<InjectArgs>();
@@ -51,29 +41,16 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   sub.add_option("--scene", a->scene, "Scene file (JSON; keys name their units, see docs/scene-figures.md)")
       ->required();
   sub.add_option("--out", a->out, "Output directory (created; existing files are replaced)")->required();
-  sub.add_option("--set", a->set, "Override a scene key: key=value (JSON value), repeatable");
-  sub.add_option("--tip-mm", a->tipMm, "Override tip_mm: x,y,z")->delimiter(',')->expected(3);
-  sub.add_option("--volume-ml", a->volumeMl, "Override volume_ml");
-  sub.add_option("--flow-rate-ml-per-s", a->flowRateMlPerS, "Override flow_rate_ml_per_s");
-  sub.add_option("--viscosity-pa-s", a->viscosityPaS, "Override viscosity_pa_s");
-  sub.add_option("--snapshot-interval-s", a->snapshotIntervalS, "Override snapshot_interval_s");
-  sub.add_option("--preset", a->preset, "Override the model preset (default, paper)");
-  sub.add_option("--threads", a->threads, "OpenMP threads (0: the OpenMP default)");
+  cementsph::app::addSceneOverrideOptions(sub, a->overrides);
+  sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--quiet", a->quiet, "No progress line");
   sub.add_flag("--no-pictures", a->noPictures,
                "Do not write tip_pressure.png (Fig. 10) nor, with simulated_ct_snapshots, the X-ray sequence "
                "in DIR/xray (Fig. 12)");
   return [a, &sub]() {
     // Flags given on the command line override the scene file (and --set), in this order.
-    std::vector<std::string> overrides = a->set;
-    if (!a->tipMm.empty())
-      overrides.push_back("tip_mm=[" + number(a->tipMm[0]) + "," + number(a->tipMm[1]) + "," + number(a->tipMm[2]) + "]");
-    if (sub.count("--volume-ml")) overrides.push_back("volume_ml=" + number(a->volumeMl));
-    if (sub.count("--flow-rate-ml-per-s")) overrides.push_back("flow_rate_ml_per_s=" + number(a->flowRateMlPerS));
-    if (sub.count("--viscosity-pa-s")) overrides.push_back("viscosity_pa_s=" + number(a->viscosityPaS));
-    if (sub.count("--snapshot-interval-s")) overrides.push_back("snapshot_interval_s=" + number(a->snapshotIntervalS));
-    if (!a->preset.empty()) overrides.push_back("preset=\"" + a->preset + "\"");
-    const cementsph::scene::SceneConfig scene = cementsph::scene::loadSceneFile(a->scene, overrides);
+    const cementsph::scene::SceneConfig scene =
+        cementsph::scene::loadSceneFile(a->scene, cementsph::app::sceneOverrides(sub, a->overrides));
     if (a->threads > 0) omp_set_num_threads(a->threads);
     // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files.
     const auto ct = cementsph::imaging::toVtk(cementsph::imaging::readVolume(a->ct));
