@@ -144,7 +144,7 @@ app::CommandRunner setupDarcy(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--max-steps-per-force", o->maxSteps, "step cap for one body force (not converged past it)")
       ->capture_default_str();
-  sub.add_option("--threads", o->threads, "OpenMP threads (default: all cores)");
+  sub.add_option("--threads", o->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--no-plot", o->noPlot, "write the CSV only");
   return [o] { return runDarcy(*o); };
 }

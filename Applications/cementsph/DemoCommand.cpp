@@ -136,7 +136,7 @@ cementsph::app::CommandRunner setupDemo(CLI::App& sub) {
   auto o = std::make_shared<DemoOptions>();
   sub.add_option("--out", o->out, "output folder (inject/, compare/, xray/, metrics.json, tip_pressure.png)")->capture_default_str();
   sub.add_option("--data-dir", o->dataDir, "folder holding foam-phantom/ and scenes/")->capture_default_str();
-  sub.add_option("--threads", o->threads, "OpenMP threads for the injection (0: all cores)");
+  sub.add_option("--threads", o->threads, "OpenMP threads (0: the cores the load average leaves free)");
   return [o] { return runDemo(*o); };
 }
 

@@ -30,7 +30,7 @@ void addDrrGeometryOptions(CLI::App& sub, DrrGeometryArgs& a, const std::string&
                  "Gantry angle about z, degrees (0: source on +x, 90: source on -y; plastimatch's sense)")
       ->capture_default_str();
   sub.add_flag("--parallel", g.parallel, "Parallel beam along the beam axis (sad/sid unused)");
-  sub.add_option("--threads", a.threads, "OpenMP threads (0: OpenMP's default)")->capture_default_str();
+  sub.add_option("--threads", a.threads, "OpenMP threads (0: the cores the load average leaves free)")->capture_default_str();
 }
 
 drr::DRRGeometry checkedGeometry(const DrrGeometryArgs& a) {

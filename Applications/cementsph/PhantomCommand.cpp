@@ -52,7 +52,7 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
   sub.add_option("--viscosity-pa-s", a->viscosityPaS, "Cement viscosity in Pa.s (default 100)");
   sub.add_flag("--no-post", a->noPost, "Only the pre-injection CT and truth.json");
   sub.add_flag("--post-dicom", a->postDicom, "Also write the post CT as a DICOM series in DIR/post_dicom");
-  sub.add_option("--threads", a->threads, "OpenMP threads (0: the OpenMP default)");
+  sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--quiet", a->quiet, "No progress line");
   return [a, &sub]() {
     using namespace cementsph::phantom;

@@ -107,7 +107,7 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
   sub.add_flag("--no-registration", a->noRegistration,
                "The reference CT is already aligned with --ct (it is only resampled onto its grid)");
   app::addSceneOverrideOptions(sub, a->scene_overrides);
-  sub.add_option("--threads", a->threads, "OpenMP threads (0: the OpenMP default)");
+  sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--keep-runs", a->keepRuns, "Keep every run's inject outputs in DIR/runs/<integrator>_r<radius>mm");
   sub.add_flag("--no-pictures", a->noPictures, "Do not write the PNG plots");
 

@@ -56,8 +56,9 @@ struct ModelParameters {
 
   // --- neighbour search -----------------------------------------------------------------------
   double neighbourSkin = 0.2;      // Verlet skin as a fraction of h; 0 rebuilds lists every step
-  // A particle added while the lists are valid gets its own list and joins its neighbours' sums
-  // pairwise, instead of a rebuild of all lists (the injection adds one every few steps).
+  // Relisting (Simulation.h): a particle added while the lists are valid, or one that has moved half
+  // the skin while few others have, gets lists of its own instead of a rebuild of all lists (the
+  // injection adds a particle every few steps, and only those near the tip move fast). false: rebuild.
   bool insertWithoutRebuild = true;
 
   // --- fixed particles ------------------------------------------------------------------------
