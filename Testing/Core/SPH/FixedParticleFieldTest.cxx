@@ -213,5 +213,30 @@ TEST(Relisting, SameRunAsFullRebuilds) {
   }
 }
 
+// Forces asked for right after particles were added (no density update in between): the lists and
+// densities are brought up to date first, so the result equals the one with the update.
+TEST(Relisting, ForcesAfterAnAdditionUpdateTheListsFirst) {
+  for (FixedSumMethod sums : {FixedSumMethod::Exact, FixedSumMethod::Tabulated}) {
+    PorousInjection a = makePorousInjection(sums, true);
+    PorousInjection b = makePorousInjection(sums, true);
+    runFor(a, 1.0);
+    runFor(b, 1.0);
+    const Eigen::Vector3d p(0.0, 0.0, 2.5e-3), v = Eigen::Vector3d::Zero();
+    const double m = a.sim->fluid().mass[0];
+    a.sim->addFluidParticle(p, v, m);
+    b.sim->addFluidParticle(p, v, m);
+    a.sim->updateAccelerations();
+    b.sim->updateDensityAndPressure();
+    b.sim->updateAccelerations();
+    const FluidParticles& fa = a.sim->fluid();
+    const FluidParticles& fb = b.sim->fluid();
+    ASSERT_EQ(fa.size(), fb.size());
+    for (std::size_t i = 0; i < fa.size(); ++i) {
+      EXPECT_EQ(fa.ax[i], fb.ax[i]) << toString(sums) << " particle " << i;
+      EXPECT_EQ(fa.density[i], fb.density[i]) << toString(sums) << " particle " << i;
+    }
+  }
+}
+
 } // namespace
 } // namespace cementsph::sph

@@ -425,6 +425,12 @@ template <bool Periodic> void Simulation::densityPass() {
 // ------------------------------------------------------------------------------------------------
 
 void Simulation::updateAccelerations() {
+  // The force pass needs the lists and densities of the current particle set: if particles were added
+  // or removed since the last density update, do that update first.
+  const std::size_t n = fluid_.size();
+  if (!listsValid_ || relistsDirty_ || refX_.size() != n || fluid_.density.size() != n ||
+      (tabulated_ && fixedGradX_.size() != n))
+    updateDensityAndPressure();
   const bool morris = parameters_.viscosityModel == ViscosityModel::Morris;
   if (anyPeriodic_) morris ? forcePass<true, true>() : forcePass<true, false>();
   else morris ? forcePass<false, true>() : forcePass<false, false>();
