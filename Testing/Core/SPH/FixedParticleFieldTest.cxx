@@ -25,7 +25,7 @@ struct PorousInjection {
   std::unique_ptr<Simulation> sim;
 };
 
-PorousInjection makePorousInjection(FixedSumMethod sums, bool insertWithoutRebuild, double fieldSpacing = 0.25) {
+PorousInjection makePorousInjection(FixedSumMethod sums, bool relisting, double fieldSpacing = 0.25) {
   const ModelPreset preset = modelPreset("default");
   CannulaSpec spec;
   spec.direction = Eigen::Vector3d::UnitZ();
@@ -41,7 +41,7 @@ PorousInjection makePorousInjection(FixedSumMethod sums, bool insertWithoutRebui
   m.maxTimeStep = emitter->maxTimeStep();
   m.fixedSums = sums;
   m.fixedFieldSpacing = fieldSpacing;
-  m.insertWithoutRebuild = insertWithoutRebuild;
+  m.relisting = relisting;
   Domain domain;
   domain.lower.setConstant(-kHalfWidth);
   domain.upper.setConstant(kHalfWidth);

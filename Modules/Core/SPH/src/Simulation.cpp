@@ -102,7 +102,7 @@ std::uint64_t Simulation::addFluidParticle(const Eigen::Vector3d& position, cons
     fluid_.zp[i] = position.z() - velocity.z() * centralDifferenceStep_;
   }
   // A newcomer is relisted (its lists are made at the next update) instead of rebuilding every list.
-  if (listsValid_ && parameters_.insertWithoutRebuild && i == refX_.size()) {
+  if (listsValid_ && parameters_.relisting && i == refX_.size()) {
     refX_.push_back(fluid_.x[i]);
     refY_.push_back(fluid_.y[i]);
     refZ_.push_back(fluid_.z[i]);
@@ -143,18 +143,14 @@ void Simulation::updateNeighbourLists() {
   }
   const double limit2 = 0.25 * skin * skin; // a particle may move half the skin from its reference
   auto moved = [&](std::size_t i) {
-    double d[3] = {fluid_.x[i] - refX_[i], fluid_.y[i] - refY_[i], fluid_.z[i] - refZ_[i]};
-    if (anyPeriodic_)
-      for (int a = 0; a < 3; ++a) {
-        if (d[a] > halfExtent_[a]) d[a] -= extent_[a];
-        else if (d[a] < -halfExtent_[a]) d[a] += extent_[a];
-      }
-    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > limit2;
+    double dx = fluid_.x[i] - refX_[i], dy = fluid_.y[i] - refY_[i], dz = fluid_.z[i] - refZ_[i];
+    if (anyPeriodic_) wrapMinimumImage(dx, dy, dz);
+    return dx * dx + dy * dy + dz * dz > limit2;
   };
   std::size_t count = 0;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) count += moved(i) ? 1 : 0;
-  const std::size_t relistLimit = parameters_.insertWithoutRebuild ? std::max<std::size_t>(64, n / 16) : 0;
+  const std::size_t relistLimit = parameters_.relisting ? std::max<std::size_t>(64, n / 16) : 0;
   if (count == 0 && !relistsDirty_) return;
   if (relistedIndex_.size() + count > relistLimit) {
     rebuildNeighbourLists();
@@ -223,14 +219,9 @@ template <bool Periodic> void Simulation::buildLists() {
 
   auto within = [&](double xi, double yi, double zi, double xj, double yj, double zj) {
     double dx = xi - xj, dy = yi - yj, dz = zi - zj;
-    if constexpr (Periodic) {
-      if (dx > halfExtent_[0]) dx -= extent_[0]; else if (dx < -halfExtent_[0]) dx += extent_[0];
-      if (dy > halfExtent_[1]) dy -= extent_[1]; else if (dy < -halfExtent_[1]) dy += extent_[1];
-      if (dz > halfExtent_[2]) dz -= extent_[2]; else if (dz < -halfExtent_[2]) dz += extent_[2];
-    }
+    if constexpr (Periodic) wrapMinimumImage(dx, dy, dz);
     return dx * dx + dy * dy + dz * dz < r2max;
   };
-  // Two passes (count, then fill) make the lists in parallel without locks, and deterministic.
   auto visit = [&](std::size_t i, auto&& onFluid, auto&& onFixed) {
     const int cell = grid_.cellOf(X[i], Y[i], Z[i]);
     for (const std::uint32_t* c = grid_.neighbourCellsBegin(cell); c != grid_.neighbourCellsEnd(cell); ++c) {
@@ -295,11 +286,7 @@ void Simulation::buildRelistedLists() {
   const double radius = densityKernel_.support() + parameters_.neighbourSkin * parameters_.smoothingLength;
   const double r2max = radius * radius;
   auto dist2 = [&](double dx, double dy, double dz) {
-    if (anyPeriodic_) {
-      if (dx > halfExtent_[0]) dx -= extent_[0]; else if (dx < -halfExtent_[0]) dx += extent_[0];
-      if (dy > halfExtent_[1]) dy -= extent_[1]; else if (dy < -halfExtent_[1]) dy += extent_[1];
-      if (dz > halfExtent_[2]) dz -= extent_[2]; else if (dz < -halfExtent_[2]) dz += extent_[2];
-    }
+    if (anyPeriodic_) wrapMinimumImage(dx, dy, dz);
     return dx * dx + dy * dy + dz * dz;
   };
   relistedFluid_.offset.assign(1, 0);
@@ -338,12 +325,8 @@ void Simulation::updateDensityAndPressure() {
   else densityPass<false>();
 }
 
-#define CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)                                                           \
-  if constexpr (Periodic) {                                                                           \
-    if (dx > halfExtent_[0]) dx -= extent_[0]; else if (dx < -halfExtent_[0]) dx += extent_[0];       \
-    if (dy > halfExtent_[1]) dy -= extent_[1]; else if (dy < -halfExtent_[1]) dy += extent_[1];       \
-    if (dz > halfExtent_[2]) dz -= extent_[2]; else if (dz < -halfExtent_[2]) dz += extent_[2];       \
-  }
+#define CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz) \
+  if constexpr (Periodic) wrapMinimumImage(dx, dy, dz);
 
 template <bool Periodic> void Simulation::densityPass() {
   const std::size_t n = fluid_.size();

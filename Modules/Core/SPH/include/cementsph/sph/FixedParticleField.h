@@ -27,7 +27,7 @@
 
 namespace cementsph::sph {
 
-// The exact sums over fixed particles at a point: D (cubic spline, Eq. 10) and G (spiky gradient, Eq. 11).
+// The sums over fixed particles at a point (what a node holds): D (cubic spline, Eq. 10) and G (spiky gradient, Eq. 11).
 struct FixedSums {
   double density = 0.0;                // D [kg/m^3]
   double gradient[3] = {0.0, 0.0, 0.0}; // G [kg/m^4]; a fixed particle exactly at the point adds nothing
@@ -50,9 +50,6 @@ public:
   void prepare(const double* x, const double* y, const double* z, std::size_t n);
   // Trilinear D and G at a point of a prepared brick.
   void sample(double x, double y, double z, double& density, double gradient[3]) const;
-
-  // Exact sums at a point (what the nodes hold); also the oracle of the tests.
-  FixedSums exact(double x, double y, double z) const;
 
   std::size_t bricksFilled() const { return filled_; }
   std::size_t bytesUsed() const { return filled_ * kNodesPerBrick * sizeof(FixedSums); }

@@ -59,7 +59,7 @@ struct ModelParameters {
   // Relisting (Simulation.h): a particle added while the lists are valid, or one that has moved half
   // the skin while few others have, gets lists of its own instead of a rebuild of all lists (the
   // injection adds a particle every few steps, and only those near the tip move fast). false: rebuild.
-  bool insertWithoutRebuild = true;
+  bool relisting = true;
 
   // --- fixed particles ------------------------------------------------------------------------
   FixedSumMethod fixedSums = FixedSumMethod::Exact;

@@ -95,6 +95,12 @@ public:
 
 private:
   void validateParameters() const;
+  // The minimum-image separation on periodic axes (halfExtent_ is +inf on open ones, so they pass).
+  void wrapMinimumImage(double& dx, double& dy, double& dz) const {
+    if (dx > halfExtent_[0]) dx -= extent_[0]; else if (dx < -halfExtent_[0]) dx += extent_[0];
+    if (dy > halfExtent_[1]) dy -= extent_[1]; else if (dy < -halfExtent_[1]) dy += extent_[1];
+    if (dz > halfExtent_[2]) dz -= extent_[2]; else if (dz < -halfExtent_[2]) dz += extent_[2];
+  }
   void updateNeighbourLists();
   void rebuildNeighbourLists();
   template <bool Periodic> void buildLists();
