@@ -101,7 +101,7 @@ std::size_t CannulaEmitter::addWall(Simulation& sim) const {
   std::size_t added = 0;
   for (const Eigen::Vector3d& p : wallPositions())
     if (sim.domain().contains(p)) {
-      sim.addFixedParticle(p, wallParticleMass());
+      sim.addFixedParticle(p, wallParticleMass(), wallSpacing() * wallSpacing() * wallSpacing());
       ++added;
     }
   return added;

@@ -79,7 +79,7 @@ void FixedParticleField::fillBrick(std::size_t b) {
         const int cell = grid_->cellIndex(ci, cj, ck);
         for (std::uint32_t p = start[static_cast<std::size_t>(cell)]; p < start[static_cast<std::size_t>(cell) + 1]; ++p) {
           const double px = fixed_->x[p], py = fixed_->y[p], pz = fixed_->z[p];
-          const double m = static_cast<double>(fixed_->mass[p]);
+          const double m = static_cast<double>(byVolume_ ? fixed_->volume[p] : fixed_->mass[p]);
           int k0, k1;
           nodeRange(pz, 2, reach, k0, k1);
           for (int k = k0; k <= k1; ++k) {

@@ -26,30 +26,42 @@ std::size_t FluidParticles::add(const Eigen::Vector3d& p, const Eigen::Vector3d&
   pressure.push_back(0.0);
   mass.push_back(m);
   birthTime.push_back(time);
+  viscosity.push_back(0.0);
+  dragRate.push_back(0.0);
+  porosity.push_back(1.0);
+  permeability.push_back(0.0);
+  volumeFraction.push_back(1.0);
+  front.push_back(0);
   id.push_back(identity);
   return x.size() - 1;
 }
 
+std::vector<std::vector<double>*> FluidParticles::doubleFields() {
+  return {&x, &y, &z, &xp, &yp, &zp, &vx, &vy, &vz, &ax, &ay, &az, &density, &pressure, &mass, &birthTime,
+          &viscosity, &dragRate, &porosity, &permeability, &volumeFraction};
+}
+
 void FluidParticles::permute(const std::vector<std::uint32_t>& order) {
   std::vector<double> s;
-  for (auto* f : {&x, &y, &z, &xp, &yp, &zp, &vx, &vy, &vz, &ax, &ay, &az, &density, &pressure, &mass, &birthTime})
-    permuteField(*f, order, s);
+  for (auto* f : doubleFields()) permuteField(*f, order, s);
   std::vector<std::uint64_t> si;
   permuteField(id, order, si);
+  std::vector<std::uint8_t> sf;
+  permuteField(front, order, sf);
 }
 
 std::size_t FluidParticles::compact(const std::vector<std::uint8_t>& keep) {
   const std::size_t before = size();
-  for (auto* f : {&x, &y, &z, &xp, &yp, &zp, &vx, &vy, &vz, &ax, &ay, &az, &density, &pressure, &mass, &birthTime})
-    compactField(*f, keep);
+  for (auto* f : doubleFields()) compactField(*f, keep);
   compactField(id, keep);
+  compactField(front, keep);
   return before - size();
 }
 
 void FluidParticles::reserve(std::size_t n) {
-  for (auto* f : {&x, &y, &z, &xp, &yp, &zp, &vx, &vy, &vz, &ax, &ay, &az, &density, &pressure, &mass, &birthTime})
-    f->reserve(n);
+  for (auto* f : doubleFields()) f->reserve(n);
   id.reserve(n);
+  front.reserve(n);
 }
 
 } // namespace cementsph::sph

@@ -1,5 +1,7 @@
 #include "cementsph/sph/Simulation.h"
 
+#include "cementsph/sph/ModelRegistry.h"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -24,12 +26,20 @@ std::string formatSeconds(double s) {
 }
 } // namespace
 
-double StepLimits::stable() const { return std::min({acoustic, viscous, drag, force, overdamped}); }
-
 Simulation::Simulation(const ModelParameters& parameters, const Domain& domain)
     : parameters_(parameters), domain_(domain), densityKernel_(parameters.smoothingLength),
       pressureKernel_(parameters.smoothingLength) {
   validateParameters();
+  const ModelRegistry& registry = ModelRegistry::instance();
+  try {
+    pressureModel_ = registry.pressure.create(parameters_.pressureModel, parameters_, "pressure model");
+    resistance_ = registry.resistance.create(parameters_.resistanceName(), parameters_, "resistance");
+    viscosityLaw_ = registry.viscosity.create(parameters_.viscosityLaw, parameters_, "viscosity law");
+    integrator_ = registry.integrator.create(toString(parameters_.integrator), parameters_, "integrator");
+    boundary_ = registry.boundary.create(parameters_.boundary, parameters_, "boundary");
+  } catch (const std::invalid_argument& e) {
+    throw SimulationError(e.what());
+  }
   const double listRadius = densityKernel_.support() * (1.0 + 0.5 * parameters_.neighbourSkin);
   grid_.configure(domain_, listRadius);
   const Eigen::Vector3d e = domain_.extent();
@@ -42,7 +52,10 @@ Simulation::Simulation(const ModelParameters& parameters, const Domain& domain)
   fixed_.pressure = parameters_.pressure(fixed_.density);
   tabulated_ = parameters_.fixedSums == FixedSumMethod::Tabulated;
   if (tabulated_)
+  {
     field_.configure(domain_, parameters_.fixedFieldSpacing * parameters_.smoothingLength, parameters_.smoothingLength);
+    field_.weighByVolume(parameters_.pressureModel == "incompressible");
+  }
 }
 
 void Simulation::validateParameters() const {
@@ -60,8 +73,14 @@ void Simulation::validateParameters() const {
   if (p.viscosityModel == ViscosityModel::Drag)
     require(std::isfinite(p.dragCoefficient) && p.dragCoefficient > 0, "drag coefficient Cf must be positive");
   if (p.integrator == Integrator::Overdamped)
-    require(p.viscosityModel == ViscosityModel::Drag,
-            "the overdamped integrator is the creeping-flow limit of the drag model (Eq. 9): use --viscosity-model drag");
+    require(p.resistanceName() != "none",
+            "the overdamped integrator is the creeping-flow limit of a resistance (Eq. 9 drag or a permeability): "
+            "use --viscosity-model drag");
+  if (p.pressureModel == "incompressible") {
+    require(p.integrator == Integrator::Overdamped,
+            "the incompressible pressure model is a creeping (Darcy) flow: it needs the overdamped integrator");
+    require(p.viscosityModel != ViscosityModel::Morris, "the incompressible pressure model takes no Morris viscosity");
+  }
   if (p.integrator == Integrator::CentralDifference)
     require(p.viscosityModel != ViscosityModel::Morris,
             "the central-difference integrator (Eq. 8) is implicit in the drag only; Morris viscosity (Eq. 7) "
@@ -115,10 +134,12 @@ std::uint64_t Simulation::addFluidParticle(const Eigen::Vector3d& position, cons
   return nextId_++;
 }
 
-void Simulation::addFixedParticle(const Eigen::Vector3d& position, double mass) {
+void Simulation::addFixedParticle(const Eigen::Vector3d& position, double mass, double volume) {
   if (!position.allFinite() || !(mass > 0)) throw SimulationError("fixed particle with a non-finite position or non-positive mass");
   if (!domain_.contains(position)) throw SimulationError("fixed particle placed outside the domain");
-  fixed_.add(position, mass);
+  if (volume <= 0) volume = mass / parameters_.restDensity;
+  if (!std::isfinite(volume)) throw SimulationError("fixed particle with a non-finite volume");
+  fixed_.add(position, mass, volume);
   fixedBinned_ = false;
   listsValid_ = false;
 }
@@ -184,9 +205,13 @@ void Simulation::rebuildNeighbourLists() {
       s.resize(order.size());
     }
     std::vector<float> sm(order.size());
-    for (std::size_t k = 0; k < order.size(); ++k) sm[k] = fixed_.mass[order[k]];
-    fixed_.mass.swap(sm);
-    fixed_.x.shrink_to_fit(); fixed_.y.shrink_to_fit(); fixed_.z.shrink_to_fit(); fixed_.mass.shrink_to_fit();
+    for (auto* f : {&fixed_.mass, &fixed_.volume}) {
+      for (std::size_t k = 0; k < order.size(); ++k) sm[k] = (*f)[order[k]];
+      f->swap(sm);
+      sm.resize(order.size());
+    }
+    fixed_.x.shrink_to_fit(); fixed_.y.shrink_to_fit(); fixed_.z.shrink_to_fit();
+    fixed_.mass.shrink_to_fit(); fixed_.volume.shrink_to_fit();
     fixedBinned_ = true;
     if (tabulated_) field_.attach(&fixed_, &grid_, &fixedCellStart_);
   }
@@ -316,96 +341,61 @@ void Simulation::buildRelistedLists() {
 }
 
 // ------------------------------------------------------------------------------------------------
-// Density (Eq. 2) and pressure (Eq. 6)
+// One step's parts
 // ------------------------------------------------------------------------------------------------
+
+PairIteration Simulation::pairs() const {
+  PairIteration::Lists l;
+  l.fluid = &fluidNeighbours_;
+  l.fixed = &fixedNeighbours_;
+  l.relistedFluid = &relistedFluid_;
+  l.relistedFixed = &relistedFixed_;
+  l.relistedIndex = &relistedIndex_;
+  l.relisted = relisted_.data();
+  l.listed = listed_;
+  return PairIteration(fluid_, fixed_, l, densityKernel_.support(), extent_, halfExtent_, anyPeriodic_);
+}
 
 void Simulation::updateDensityAndPressure() {
   updateNeighbourLists();
-  if (anyPeriodic_) densityPass<true>();
-  else densityPass<false>();
+  viscosityLaw_->update(*this);
+  pressureModel_->density(*this);
+  resistance_->update(*this);
+  pressureModel_->pressure(*this);
 }
 
-#define CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz) \
-  if constexpr (Periodic) wrapMinimumImage(dx, dy, dz);
-
-template <bool Periodic> void Simulation::densityPass() {
+// Eq. 2: rho_i = sum_j m_j W(r_ij, h) over fluid and fixed particles (the particle itself included).
+void Simulation::sumDensity() {
   const std::size_t n = fluid_.size();
-  const double support2 = densityKernel_.support() * densityKernel_.support();
   const double w0 = densityKernel_.value(0.0);
-  const double cs2 = parameters_.soundSpeed * parameters_.soundSpeed, rho0 = parameters_.restDensity;
-  const double* X = fluid_.x.data(); const double* Y = fluid_.y.data(); const double* Z = fluid_.z.data();
   const double* M = fluid_.mass.data();
-  const double* FX = fixed_.x.data(); const double* FY = fixed_.y.data(); const double* FZ = fixed_.z.data();
   const float* FM = fixed_.mass.data();
   double* RHO = fluid_.density.data();
-  double* P = fluid_.pressure.data();
   if (tabulated_) {
-    field_.prepare(X, Y, Z, n);
+    field_.prepare(fluid_.x.data(), fluid_.y.data(), fluid_.z.data(), n);
     fixedGradX_.resize(n); fixedGradY_.resize(n); fixedGradZ_.resize(n);
   }
-  // The fixed particles' share at particle i: the table (which also gives grad Phi for the force pass),
-  // or the pair sum over i's fixed list [begin, end).
-  auto fixedDensity = [&](std::size_t i, const std::uint32_t* list, std::uint64_t begin, std::uint64_t end) {
-    if (tabulated_) {
-      double d, g[3];
-      field_.sample(X[i], Y[i], Z[i], d, g);
-      fixedGradX_[i] = g[0]; fixedGradY_[i] = g[1]; fixedGradZ_[i] = g[2];
-      return d;
+  struct Eq2 {
+    Simulation& s;
+    const double* M; const float* FM; double* RHO; double w0;
+    double begin(std::size_t i) { return M[i] * w0; }
+    void fluid(std::size_t, std::size_t j, const Pair& p, double& rho) { rho += M[j] * s.densityKernel_.value(p.r()); }
+    void mirror(std::size_t j, std::size_t i, const Pair& p) { RHO[j] += M[i] * s.densityKernel_.value(p.r()); }
+    void fixed(std::size_t, std::uint32_t k, const Pair& p, double& rho) {
+      rho += static_cast<double>(FM[k]) * s.densityKernel_.value(p.r());
     }
-    double rho = 0.0;
-    for (std::uint64_t k = begin; k < end; ++k) {
-      const std::uint32_t j = list[k];
-      double dx = X[i] - FX[j], dy = Y[i] - FY[j], dz = Z[i] - FZ[j];
-      CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 < support2) rho += static_cast<double>(FM[j]) * densityKernel_.value(std::sqrt(r2));
+    void finish(std::size_t i, double& rho) {
+      if (s.tabulated_) { // the table holds the fixed particles' share (and grad Phi for the force pass)
+        double d, g[3];
+        s.field_.sample(s.fluid_.x[i], s.fluid_.y[i], s.fluid_.z[i], d, g);
+        s.fixedGradX_[i] = g[0]; s.fixedGradY_[i] = g[1]; s.fixedGradZ_[i] = g[2];
+        rho += d;
+      }
+      RHO[i] = rho;
     }
-    return rho;
-  };
-  const std::uint32_t* fl = fluidNeighbours_.index.data();
-  const std::uint32_t* sl = fixedNeighbours_.index.data();
-  const std::size_t listed = listed_;
-  const std::uint8_t* relisted = relisted_.data();
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < listed; ++i) {
-    if (relisted[i]) continue; // summed from its own lists below
-    const double xi = X[i], yi = Y[i], zi = Z[i];
-    double rho = M[i] * w0; // the particle itself
-    for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
-      const std::uint32_t j = fl[k];
-      if (relisted[j]) continue; // the pair is in j's lists
-      double dx = xi - X[j], dy = yi - Y[j], dz = zi - Z[j];
-      CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 < support2) rho += M[j] * densityKernel_.value(std::sqrt(r2));
-    }
-    rho += fixedDensity(i, sl, fixedNeighbours_.offset[i], fixedNeighbours_.offset[i + 1]);
-    RHO[i] = rho;
-    P[i] = cs2 * (rho - rho0);
-  }
-  // Relisted particles, in ascending order: each pair in their lists adds to both partners.
-  for (std::size_t q = 0; q < relistedIndex_.size(); ++q) {
-    const std::size_t i = relistedIndex_[q];
-    double rho = M[i] * w0 + fixedDensity(i, relistedFixed_.index.data(), relistedFixed_.offset[q], relistedFixed_.offset[q + 1]);
-    for (std::uint64_t k = relistedFluid_.offset[q]; k < relistedFluid_.offset[q + 1]; ++k) {
-      const std::uint32_t j = relistedFluid_.index[k];
-      double dx = X[i] - X[j], dy = Y[i] - Y[j], dz = Z[i] - Z[j];
-      CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 >= support2) continue;
-      const double w = densityKernel_.value(std::sqrt(r2));
-      rho += M[j] * w;
-      RHO[j] += M[i] * w;
-      P[j] = cs2 * (RHO[j] - rho0);
-    }
-    RHO[i] = rho;
-    P[i] = cs2 * (rho - rho0);
-  }
+  } eq2{*this, M, FM, RHO, w0};
+  pairs().visit(eq2);
 }
-
-// ------------------------------------------------------------------------------------------------
-// Accelerations: pressure (Eq. 5), body force, Morris viscosity (Eq. 7)
-// ------------------------------------------------------------------------------------------------
 
 void Simulation::updateAccelerations() {
   // The force pass needs the lists and densities of the current particle set: if particles were added
@@ -414,178 +404,112 @@ void Simulation::updateAccelerations() {
   if (!listsValid_ || relistsDirty_ || refX_.size() != n || fluid_.density.size() != n ||
       (tabulated_ && fixedGradX_.size() != n))
     updateDensityAndPressure();
-  const bool morris = parameters_.viscosityModel == ViscosityModel::Morris;
-  if (anyPeriodic_) morris ? forcePass<true, true>() : forcePass<true, false>();
-  else morris ? forcePass<false, true>() : forcePass<false, false>();
+  if (pressureModel_->makesAccelerations()) return;
+  if (parameters_.viscosityModel == ViscosityModel::Morris) forcePass<true>();
+  else forcePass<false>();
 }
 
-template <bool Periodic, bool Morris> void Simulation::forcePass() {
+// Eq. 5 (pressure, spiky kernel) and, for Morris, Eq. 7 (viscosity, cubic spline), plus the body force.
+template <bool Morris> void Simulation::forcePass() {
   const std::size_t n = fluid_.size();
   const double h = parameters_.smoothingLength;
-  const double support2 = 4.0 * h * h;
-  const double eta2 = 0.01 * h * h; // Eq. 7 regularisation (Morris et al. 1997)
-  const double twoMu = 2.0 * parameters_.viscosity;
   const Eigen::Vector3d g = parameters_.bodyForce;
   // p / rho^2 of each particle, used by every pair (Eq. 5).
   pressureOverDensity2_.resize(n);
   double* pr2 = pressureOverDensity2_.data();
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) pr2[i] = fluid_.pressure[i] / (fluid_.density[i] * fluid_.density[i]);
-  const double fixedPr2 = fixed_.pressure / (fixed_.density * fixed_.density);
-  const double* X = fluid_.x.data(); const double* Y = fluid_.y.data(); const double* Z = fluid_.z.data();
-  const double* VX = fluid_.vx.data(); const double* VY = fluid_.vy.data(); const double* VZ = fluid_.vz.data();
-  const double* M = fluid_.mass.data(); const double* RHO = fluid_.density.data();
-  const double* FX = fixed_.x.data(); const double* FY = fixed_.y.data(); const double* FZ = fixed_.z.data();
-  const float* FM = fixed_.mass.data();
-  double* AX = fluid_.ax.data(); double* AY = fluid_.ay.data(); double* AZ = fluid_.az.data();
-  const double fixedRho = fixed_.density;
 
-  // Eq. 5 (and Eq. 7) for the pair (i, j): the acceleration of i is +(fx, fy, fz) M[j], that of j is
-  // -(fx, fy, fz) M[i] (antisymmetric: momentum is conserved pair by pair).
-  auto pairForce = [&](std::size_t i, std::size_t j, double& fx, double& fy, double& fz) {
-    double dx = X[i] - X[j], dy = Y[i] - Y[j], dz = Z[i] - Z[j];
-    CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
-    const double r2 = dx * dx + dy * dy + dz * dz;
-    fx = fy = fz = 0.0;
-    if (r2 >= support2) return;
-    const double r = std::sqrt(r2);
-    double ux, uy, uz;
-    if (r > 1e-12 * h) { ux = dx / r; uy = dy / r; uz = dz / r; }
-    else { // coincident pair: the spiky gradient is finite, its direction is not; split them
-      ux = (i < j) ? 1.0 : -1.0; uy = 0.0; uz = 0.0; // along x, antisymmetric: momentum conserved
-    }
-    // Eq. 5: a_i -= m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W_spiky
-    const double f = -(pr2[i] + pr2[j]) * pressureKernel_.derivative(r);
-    fx = f * ux; fy = f * uy; fz = f * uz;
-    if constexpr (Morris) {
-      // Eq. 7: m_j (mu_i + mu_j) / (rho_i rho_j) (r_ij . grad W) / (r_ij^2 + 0.01 h^2) (v_i - v_j)
-      const double v = twoMu / (RHO[i] * RHO[j]) * (r * densityKernel_.derivative(r)) / (r2 + eta2);
-      fx += v * (VX[i] - VX[j]); fy += v * (VY[i] - VY[j]); fz += v * (VZ[i] - VZ[j]);
-    }
-  };
-  // The fixed particles' share at particle i: the gradient of the tabulated potential, or the pairs of
-  // i's fixed list [begin, end).
-  auto fixedForce = [&](std::size_t i, const std::uint32_t* list, std::uint64_t begin, std::uint64_t end,
-                        double& ax, double& ay, double& az) {
-    const double pi = pr2[i];
-    if (tabulated_) {
-      const double c = -(pi + fixedPr2);
-      ax += c * fixedGradX_[i]; ay += c * fixedGradY_[i]; az += c * fixedGradZ_[i];
-      return;
-    }
-    for (std::uint64_t k = begin; k < end; ++k) {
-      const std::uint32_t j = list[k];
-      double dx = X[i] - FX[j], dy = Y[i] - FY[j], dz = Z[i] - FZ[j];
-      CEMENTSPH_MINIMUM_IMAGE(dx, dy, dz)
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      if (r2 >= support2) continue;
-      const double r = std::sqrt(r2);
-      double ux = 1.0, uy = 0.0, uz = 0.0; // a fluid particle exactly on a fixed one is pushed along +x
-      if (r > 1e-12 * h) { ux = dx / r; uy = dy / r; uz = dz / r; }
-      const double mj = static_cast<double>(FM[j]);
-      const double f = -mj * (pi + fixedPr2) * pressureKernel_.derivative(r);
-      ax += f * ux; ay += f * uy; az += f * uz;
-      if constexpr (Morris) { // fixed particles have zero velocity: the no-slip condition
-        const double v = mj * twoMu / (RHO[i] * fixedRho) * (r * densityKernel_.derivative(r)) / (r2 + eta2);
-        ax += v * VX[i]; ay += v * VY[i]; az += v * VZ[i];
+  struct Eq5 {
+    Simulation& s;
+    const double* pr2;
+    double h, eta2, fixedPr2, gx, gy, gz;
+    const double* M; const double* RHO; const double* MU;
+    const double* VX; const double* VY; const double* VZ;
+    const float* FM;
+    double* AX; double* AY; double* AZ;
+    struct Acc { double x, y, z; };
+    Acc begin(std::size_t) const { return {gx, gy, gz}; }
+    // The pair's acceleration of i per unit mass of j (that of j is minus it per unit mass of i).
+    void pairForce(std::size_t i, std::size_t j, const Pair& p, double& fx, double& fy, double& fz) const {
+      const double r = p.r();
+      double ux, uy, uz;
+      if (r > 1e-12 * h) { ux = p.dx / r; uy = p.dy / r; uz = p.dz / r; }
+      else { // coincident pair: the spiky gradient is finite, its direction is not; split them
+        ux = (i < j) ? 1.0 : -1.0; uy = 0.0; uz = 0.0; // along x, antisymmetric: momentum conserved
+      }
+      // Eq. 5: a_i -= m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W_spiky
+      const double f = -(pr2[i] + pr2[j]) * s.pressureKernel_.derivative(r);
+      fx = f * ux; fy = f * uy; fz = f * uz;
+      if constexpr (Morris) {
+        // Eq. 7: m_j (mu_i + mu_j) / (rho_i rho_j) (r_ij . grad W) / (r_ij^2 + 0.01 h^2) (v_i - v_j)
+        const double v = (MU[i] + MU[j]) / (RHO[i] * RHO[j]) * (r * s.densityKernel_.derivative(r)) / (p.r2 + eta2);
+        fx += v * (VX[i] - VX[j]); fy += v * (VY[i] - VY[j]); fz += v * (VZ[i] - VZ[j]);
       }
     }
-  };
-  const std::uint32_t* fl = fluidNeighbours_.index.data();
-  const std::uint32_t* sl = fixedNeighbours_.index.data();
-  const std::size_t listed = listed_;
-  const std::uint8_t* relisted = relisted_.data();
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < listed; ++i) {
-    if (relisted[i]) continue; // summed from its own lists below
-    double ax = g.x(), ay = g.y(), az = g.z();
-    for (std::uint64_t k = fluidNeighbours_.offset[i]; k < fluidNeighbours_.offset[i + 1]; ++k) {
-      const std::uint32_t j = fl[k];
-      if (relisted[j]) continue; // the pair is in j's lists
+    void fluid(std::size_t i, std::size_t j, const Pair& p, Acc& a) const {
       double fx, fy, fz;
-      pairForce(i, j, fx, fy, fz);
-      ax += M[j] * fx; ay += M[j] * fy; az += M[j] * fz;
+      pairForce(i, j, p, fx, fy, fz);
+      a.x += M[j] * fx; a.y += M[j] * fy; a.z += M[j] * fz;
     }
-    fixedForce(i, sl, fixedNeighbours_.offset[i], fixedNeighbours_.offset[i + 1], ax, ay, az);
-    AX[i] = ax; AY[i] = ay; AZ[i] = az;
-  }
-  // Relisted particles, in ascending order: each pair in their lists acts on both partners.
-  for (std::size_t q = 0; q < relistedIndex_.size(); ++q) {
-    const std::size_t i = relistedIndex_[q];
-    double ax = g.x(), ay = g.y(), az = g.z();
-    for (std::uint64_t k = relistedFluid_.offset[q]; k < relistedFluid_.offset[q + 1]; ++k) {
-      const std::uint32_t j = relistedFluid_.index[k];
+    void mirror(std::size_t j, std::size_t i, const Pair& p) const {
       double fx, fy, fz;
-      pairForce(i, j, fx, fy, fz);
-      ax += M[j] * fx; ay += M[j] * fy; az += M[j] * fz;
+      pairForce(i, j, p, fx, fy, fz);
       AX[j] -= M[i] * fx; AY[j] -= M[i] * fy; AZ[j] -= M[i] * fz;
     }
-    fixedForce(i, relistedFixed_.index.data(), relistedFixed_.offset[q], relistedFixed_.offset[q + 1], ax, ay, az);
-    AX[i] = ax; AY[i] = ay; AZ[i] = az;
-  }
+    void fixed(std::size_t i, std::uint32_t k, const Pair& p, Acc& a) const {
+      const double r = p.r();
+      double ux = 1.0, uy = 0.0, uz = 0.0; // a fluid particle exactly on a fixed one is pushed along +x
+      if (r > 1e-12 * h) { ux = p.dx / r; uy = p.dy / r; uz = p.dz / r; }
+      const double mj = static_cast<double>(FM[k]);
+      const double f = -mj * (pr2[i] + fixedPr2) * s.pressureKernel_.derivative(r);
+      a.x += f * ux; a.y += f * uy; a.z += f * uz;
+      if constexpr (Morris) { // fixed particles have zero velocity: the no-slip condition
+        const double v = mj * (2.0 * MU[i]) / (RHO[i] * s.fixed_.density) * (r * s.densityKernel_.derivative(r)) / (p.r2 + eta2);
+        a.x += v * VX[i]; a.y += v * VY[i]; a.z += v * VZ[i];
+      }
+    }
+    void finish(std::size_t i, Acc& a) const {
+      if (s.tabulated_) { // the gradient of the tabulated potential holds the fixed particles' share
+        const double c = -(pr2[i] + fixedPr2);
+        a.x += c * s.fixedGradX_[i]; a.y += c * s.fixedGradY_[i]; a.z += c * s.fixedGradZ_[i];
+      }
+      AX[i] = a.x; AY[i] = a.y; AZ[i] = a.z;
+    }
+  } eq5{*this, pr2, h, 0.01 * h * h, // Eq. 7 regularisation (Morris et al. 1997)
+        fixed_.pressure / (fixed_.density * fixed_.density), g.x(), g.y(), g.z(),
+        fluid_.mass.data(), fluid_.density.data(), fluid_.viscosity.data(),
+        fluid_.vx.data(), fluid_.vy.data(), fluid_.vz.data(), fixed_.mass.data(),
+        fluid_.ax.data(), fluid_.ay.data(), fluid_.az.data()};
+  pairs().visit(eq5);
 }
-#undef CEMENTSPH_MINIMUM_IMAGE
 
 // ------------------------------------------------------------------------------------------------
 // Time step
 // ------------------------------------------------------------------------------------------------
 
 double Simulation::maxDragRate() const {
-  if (parameters_.viscosityModel != ViscosityModel::Drag) return 0;
   double g = 0;
   const std::size_t n = fluid_.size();
 #pragma omp parallel for schedule(static) reduction(max : g) if (n >= kParallelMinimum)
-  for (std::size_t i = 0; i < n; ++i) g = std::max(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
+  for (std::size_t i = 0; i < n; ++i) g = std::max(g, fluid_.dragRate[i]);
   return g;
 }
 
 double Simulation::minDragRate() const {
-  if (parameters_.viscosityModel != ViscosityModel::Drag) return 0;
   double g = kInf;
   const std::size_t n = fluid_.size();
 #pragma omp parallel for schedule(static) reduction(min : g) if (n >= kParallelMinimum)
-  for (std::size_t i = 0; i < n; ++i) g = std::min(g, parameters_.dragRate(fluid_.mass[i], fluid_.density[i]));
+  for (std::size_t i = 0; i < n; ++i) g = std::min(g, fluid_.dragRate[i]);
   return g;
 }
 
-StepLimits Simulation::currentLimits() const {
-  const ModelParameters& p = parameters_;
-  const double h = p.smoothingLength;
-  StepLimits l{kInf, kInf, kInf, kInf, kInf, kInf};
-  double amax2 = 0, vmax2 = 0;
-  const std::size_t n = fluid_.size();
-  if (p.integrator == Integrator::Overdamped) {
-    const double gmin = minDragRate();
-    l.overdamped = p.overdampedStability * gmin * h * h / (p.soundSpeed * p.soundSpeed);
-    // v = a / gamma; the fastest particle bounds the step for accuracy.
-#pragma omp parallel for schedule(static) reduction(max : vmax2) if (n >= kParallelMinimum)
-    for (std::size_t i = 0; i < n; ++i) {
-      const double g = p.dragRate(fluid_.mass[i], fluid_.density[i]);
-      const double a2 = fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i];
-      vmax2 = std::max(vmax2, a2 / (g * g));
-    }
-    if (vmax2 > 0) l.displacement = p.maxDisplacement * h / std::sqrt(vmax2);
-    return l;
-  }
-  l.acoustic = p.acousticCourant * h / p.soundSpeed;
-#pragma omp parallel for schedule(static) reduction(max : amax2) if (n >= kParallelMinimum)
-  for (std::size_t i = 0; i < n; ++i)
-    amax2 = std::max(amax2, fluid_.ax[i] * fluid_.ax[i] + fluid_.ay[i] * fluid_.ay[i] + fluid_.az[i] * fluid_.az[i]);
-  if (amax2 > 0) l.force = p.forceCourant * std::sqrt(h / std::sqrt(amax2));
-  if (p.integrator == Integrator::Explicit) {
-    if (p.viscosityModel == ViscosityModel::Morris) l.viscous = p.viscousNumber * h * h * p.restDensity / p.viscosity;
-    if (p.viscosityModel == ViscosityModel::Drag) {
-      const double g = maxDragRate();
-      if (g > 0) l.drag = 1.0 / g;
-    }
-  }
-  return l;
-}
+StepLimits Simulation::currentLimits() const { return integrator_->limits(*this); }
 
 double Simulation::chooseTimeStep(const StepLimits& limits) {
   const ModelParameters& p = parameters_;
   const double stable = limits.stable();
-  if (p.integrator == Integrator::CentralDifference && centralDifferenceStep_ > 0) return centralDifferenceStep_;
+  if (integrator_->constantStep() && centralDifferenceStep_ > 0) return centralDifferenceStep_;
   double dt;
   if (p.fixedTimeStep) {
     dt = *p.fixedTimeStep;
@@ -596,7 +520,7 @@ double Simulation::chooseTimeStep(const StepLimits& limits) {
       else if (stable == limits.force) which = "force";
       else if (stable == limits.overdamped) which = "overdamped";
       const std::string msg = "time step " + formatSeconds(dt) + " exceeds the " + which + " stability limit " +
-                              formatSeconds(stable) + " of the " + toString(p.integrator) + " integrator";
+                              formatSeconds(stable) + " of the " + integrator_->name() + " integrator";
       if (p.stepLimitPolicy == StepLimitPolicy::Refuse) throw SimulationError(msg);
       if (warnings_.empty() || warnings_.back() != msg + "; clamped") warnings_.push_back(msg + "; clamped");
       dt = stable;
@@ -606,7 +530,7 @@ double Simulation::chooseTimeStep(const StepLimits& limits) {
     if (p.maxTimeStep) dt = std::min(dt, *p.maxTimeStep);
   }
   if (!std::isfinite(dt) || dt <= 0) throw SimulationError("no finite time step: nothing limits it (no fluid, no forces)");
-  if (p.integrator == Integrator::CentralDifference) {
+  if (integrator_->constantStep()) {
     // Eq. 8 uses one constant step; start the previous positions consistently with the velocities.
     centralDifferenceStep_ = dt;
     for (std::size_t i = 0; i < fluid_.size(); ++i) {
@@ -619,7 +543,7 @@ double Simulation::chooseTimeStep(const StepLimits& limits) {
 }
 
 double Simulation::nextTimeStep() const {
-  if (parameters_.integrator == Integrator::CentralDifference && centralDifferenceStep_ > 0) return centralDifferenceStep_;
+  if (integrator_->constantStep() && centralDifferenceStep_ > 0) return centralDifferenceStep_;
   const StepLimits l = currentLimits();
   if (parameters_.fixedTimeStep) return std::min(*parameters_.fixedTimeStep, l.stable());
   const double dt = std::min(l.stable(), l.displacement);
@@ -627,90 +551,8 @@ double Simulation::nextTimeStep() const {
 }
 
 // ------------------------------------------------------------------------------------------------
-// Integration
+// Health and the step
 // ------------------------------------------------------------------------------------------------
-
-void Simulation::integrate(double dt) {
-  const ModelParameters& p = parameters_;
-  const std::size_t n = fluid_.size();
-  const bool drag = p.viscosityModel == ViscosityModel::Drag;
-  FluidParticles& f = fluid_;
-  switch (p.integrator) {
-  case Integrator::CentralDifference: {
-    // Eq. 8 with a_i = a_other - gamma v_i and v_i = (r+ - r-) / (2 dt), solved for r+ per particle
-    // (the drag acts on a particle's own velocity only, so the system is diagonal):
-    //   r+ = [2 r - (1 - gamma dt/2) r- + dt^2 a_other] / (1 + gamma dt/2)
-#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
-    for (std::size_t i = 0; i < n; ++i) {
-      const double gdt2 = drag ? 0.5 * dt * p.dragRate(f.mass[i], f.density[i]) : 0.0;
-      const double inv = 1.0 / (1.0 + gdt2), c = 1.0 - gdt2, dt2 = dt * dt;
-      const double nx = (2 * f.x[i] - c * f.xp[i] + dt2 * f.ax[i]) * inv;
-      const double ny = (2 * f.y[i] - c * f.yp[i] + dt2 * f.ay[i]) * inv;
-      const double nz = (2 * f.z[i] - c * f.zp[i] + dt2 * f.az[i]) * inv;
-      f.vx[i] = (nx - f.xp[i]) / (2 * dt);
-      f.vy[i] = (ny - f.yp[i]) / (2 * dt);
-      f.vz[i] = (nz - f.zp[i]) / (2 * dt);
-      f.xp[i] = f.x[i]; f.yp[i] = f.y[i]; f.zp[i] = f.z[i];
-      f.x[i] = nx; f.y[i] = ny; f.z[i] = nz;
-    }
-    break;
-  }
-  case Integrator::Explicit: {
-    // Symplectic Euler: v += dt (a - gamma v); r += dt v.
-#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
-    for (std::size_t i = 0; i < n; ++i) {
-      const double g = drag ? p.dragRate(f.mass[i], f.density[i]) : 0.0;
-      f.vx[i] += dt * (f.ax[i] - g * f.vx[i]);
-      f.vy[i] += dt * (f.ay[i] - g * f.vy[i]);
-      f.vz[i] += dt * (f.az[i] - g * f.vz[i]);
-      f.xp[i] = f.x[i]; f.yp[i] = f.y[i]; f.zp[i] = f.z[i];
-      f.x[i] += dt * f.vx[i]; f.y[i] += dt * f.vy[i]; f.z[i] += dt * f.vz[i];
-    }
-    break;
-  }
-  case Integrator::Overdamped: {
-    // Creeping flow: inertia negligible (gamma dt >> 1), so the drag balances the other forces.
-#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
-    for (std::size_t i = 0; i < n; ++i) {
-      const double invG = 1.0 / p.dragRate(f.mass[i], f.density[i]);
-      f.vx[i] = f.ax[i] * invG; f.vy[i] = f.ay[i] * invG; f.vz[i] = f.az[i] * invG;
-      f.xp[i] = f.x[i]; f.yp[i] = f.y[i]; f.zp[i] = f.z[i];
-      f.x[i] += dt * f.vx[i]; f.y[i] += dt * f.vy[i]; f.z[i] += dt * f.vz[i];
-    }
-    break;
-  }
-  }
-}
-
-void Simulation::applyBoundaries() {
-  const std::size_t n = fluid_.size();
-  FluidParticles& f = fluid_;
-  std::vector<std::uint8_t> keep;
-  std::size_t leaving = 0;
-  double* pos[3] = {f.x.data(), f.y.data(), f.z.data()};
-  double* prev[3] = {f.xp.data(), f.yp.data(), f.zp.data()};
-  for (int a = 0; a < 3; ++a) {
-    const double lo = domain_.lower[a], hi = domain_.upper[a], L = extent_[a];
-    if (domain_.periodic[a]) {
-      // Re-enter on the opposite side with the same velocity and density (the paper, after Jiang et al.)
-      for (std::size_t i = 0; i < n; ++i) {
-        if (pos[a][i] >= hi) { pos[a][i] -= L; prev[a][i] -= L; }
-        else if (pos[a][i] < lo) { pos[a][i] += L; prev[a][i] += L; }
-      }
-    } else {
-      for (std::size_t i = 0; i < n; ++i)
-        if (pos[a][i] < lo || pos[a][i] >= hi) {
-          if (keep.empty()) keep.assign(n, 1);
-          if (keep[i]) { keep[i] = 0; ++leaving; }
-        }
-    }
-  }
-  if (leaving) {
-    f.compact(keep);
-    escaped_ += leaving;
-    listsValid_ = false;
-  }
-}
 
 std::string Simulation::describeParticle(std::size_t i) const {
   std::ostringstream s;
@@ -722,13 +564,16 @@ std::string Simulation::describeParticle(std::size_t i) const {
 
 void Simulation::checkHealth(double dt) const {
   const std::size_t n = fluid_.size();
+  // A runaway is a particle far faster than the model allows: ten times the speed of sound for an
+  // equation of state; for the incompressible model (no sound speed) the same bound is kept as an
+  // absolute 10 m/s, four orders above any creeping cement flow.
   const double vmax = parameters_.runawaySpeedFactor * parameters_.soundSpeed;
   std::size_t firstBad = n;
 #pragma omp parallel for schedule(static) reduction(min : firstBad) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double v2 = fluid_.vx[i] * fluid_.vx[i] + fluid_.vy[i] * fluid_.vy[i] + fluid_.vz[i] * fluid_.vz[i];
     const bool finite = std::isfinite(fluid_.x[i]) && std::isfinite(fluid_.y[i]) && std::isfinite(fluid_.z[i]) &&
-                        std::isfinite(v2) && std::isfinite(fluid_.density[i]);
+                        std::isfinite(v2) && std::isfinite(fluid_.density[i]) && std::isfinite(fluid_.pressure[i]);
     if (!finite || v2 > vmax * vmax) firstBad = std::min(firstBad, i);
   }
   if (firstBad == n) return;
@@ -737,14 +582,15 @@ void Simulation::checkHealth(double dt) const {
   s.precision(4);
   s << "simulation unstable at step " << statistics_.steps + 1 << " (t = " << time_ << " s, dt = " << dt << " s): ";
   const double v = std::sqrt(fluid_.vx[i] * fluid_.vx[i] + fluid_.vy[i] * fluid_.vy[i] + fluid_.vz[i] * fluid_.vz[i]);
-  if (!std::isfinite(v) || !std::isfinite(fluid_.x[i]) || !std::isfinite(fluid_.density[i]))
-    s << describeParticle(i) << " has a non-finite position, velocity or density";
+  if (!std::isfinite(v) || !std::isfinite(fluid_.x[i]) || !std::isfinite(fluid_.density[i]) ||
+      !std::isfinite(fluid_.pressure[i]))
+    s << describeParticle(i) << " has a non-finite position, velocity, density or pressure";
   else
     s << describeParticle(i) << " moves at " << v << " m/s, over " << parameters_.runawaySpeedFactor
       << " times the speed of sound (runaway)";
   const StepLimits l = currentLimits();
-  s << "; " << toString(parameters_.integrator) << " stability limit " << l.stable()
-    << " s: reduce the time step or check the scene";
+  s << "; " << integrator_->name() << " stability limit " << l.stable() << " s, pressure model "
+    << pressureModel_->name() << ": reduce the time step or check the scene";
   throw SimulationError(s.str());
 }
 
@@ -753,9 +599,14 @@ double Simulation::step() {
   updateDensityAndPressure();
   updateAccelerations();
   const double dt = chooseTimeStep(currentLimits());
-  integrate(dt);
+  integrator_->integrate(*this, dt);
   checkHealth(dt);
-  applyBoundaries();
+  const std::size_t leaving = boundary_->apply(*this);
+  if (leaving) {
+    escaped_ += leaving;
+    listsValid_ = false;
+  }
+  pressureModel_->stepDone(dt);
   time_ += dt;
   ++statistics_.steps;
   statistics_.smallestStep = statistics_.steps == 1 ? dt : std::min(statistics_.smallestStep, dt);

@@ -3,9 +3,12 @@
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/ModelSelection.h"
 #include "cementsph/scene/PorousSolid.h"
 #include "cementsph/scene/SimulatedCT.h"
 #include "cementsph/sph/CannulaEmitter.h"
+#include "cementsph/sph/HagenPoiseuille.h"
+#include "cementsph/sph/Pressure/IncompressibleDarcy.h"
 #include "cementsph/sph/ParticleVoxeliser.h"
 #include "cementsph/sph/Presets.h"
 #include "cementsph/sph/Simulation.h"
@@ -45,7 +48,8 @@ vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, d
     return a;
   };
   auto velocity = make("velocity_m_per_s", 3), density = make("density_kg_per_m3", 1),
-       pressure = make("pressure_pa", 1), age = make("age_s", 1);
+       pressure = make("pressure_pa", 1), age = make("age_s", 1), viscosity = make("viscosity_pa_s", 1),
+       volumeFraction = make("volume_fraction", 1), front = make("front", 1);
   auto verts = vtkSmartPointer<vtkCellArray>::New();
   for (vtkIdType i = 0; i < n; ++i) {
     const std::size_t k = std::size_t(i);
@@ -54,6 +58,9 @@ vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, d
     density->SetValue(i, f.density[k]);
     pressure->SetValue(i, f.pressure[k]);
     age->SetValue(i, time - f.birthTime[k]);
+    viscosity->SetValue(i, f.viscosity[k]);
+    volumeFraction->SetValue(i, f.volumeFraction[k]);
+    front->SetValue(i, f.front[k]);
     verts->InsertNextCell(1, &i);
   }
   auto poly = vtkSmartPointer<vtkPolyData>::New();
@@ -63,6 +70,9 @@ vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, d
   poly->GetPointData()->AddArray(density);
   poly->GetPointData()->AddArray(pressure);
   poly->GetPointData()->AddArray(age);
+  poly->GetPointData()->AddArray(viscosity);
+  poly->GetPointData()->AddArray(volumeFraction);
+  poly->GetPointData()->AddArray(front);
   return poly;
 }
 
@@ -107,6 +117,12 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   po.massFactor = scene.solidMassFactor;
   po.requiredPoreVolumeMm3 = scene.volumeMl * 1e3;
   const PorousSolid solid = buildPorousSolid(ct, tipMm, po);
+  const double roiVoxels = double(solid.roiSize[0]) * double(solid.roiSize[1]) * double(solid.roiSize[2]);
+  const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
+  const ModelChoice choice = chooseModel(scene, m.soundSpeed, roiPorosity);
+  m.pressureModel = choice.pressureModel;
+  const bool incompressible = m.pressureModel == "incompressible";
+  if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
 
   sph::CannulaSpec spec;
   spec.tip = tip;
@@ -128,10 +144,38 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   domain.upper = solid.upperM;
   sph::Simulation sim(m, domain);
   sim.reserveFluid(emitter.totalParticles());
-  for (const Eigen::Vector3d& p : solid.positions) sim.addFixedParticle(p, solid.particleMass);
+  for (const Eigen::Vector3d& p : solid.positions) sim.addFixedParticle(p, solid.particleMass, solid.grid.voxelVolume());
   const std::size_t wallParticles = emitter.addWall(sim);
   sph::TipPressureProbe probe(
       sph::TipPressureProbe::ringAroundTip(tip, spec.direction, 0.5 * spec.innerDiameter, 6, d));
+  // The incompressible model's source: the flow enters the cement within sourceRadius of the outlet.
+  const double sourceRadius = 0.5 * spec.innerDiameter + 0.5 * d;
+  if (incompressible) sim.setVolumeSource({tip, sourceRadius, spec.flowRate, spec.direction});
+  const double cannulaLength = scene.cannulaLengthMm * 1e-3;
+  // Pressure at the outlet [Pa]: incompressible, the mean pressure of the cement the source feeds (the
+  // pressure the cannula works against: power = Q p); equation of state, the paper's probe (Eq. 6 ring).
+  struct TipRecord { double time, tipPa, cannulaPa; };
+  std::vector<TipRecord> tipSeries;
+  auto outletPressure = [&]() {
+    if (!incompressible) return probe.sample(sim).meanPressure;
+    const sph::FluidParticles& f = sim.fluid();
+    double sum = 0, weight = 0;
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if ((f.position(i) - tip).norm() <= sourceRadius) {
+        const double w = f.mass[i] / f.porosity[i];
+        sum += w * f.pressure[i];
+        weight += w;
+      }
+    return weight > 0 ? sum / weight : 0.0;
+  };
+  // Cement volume: sum of m / rho with each particle's own density [m^3].
+  auto cementVolume = [&]() {
+    const sph::FluidParticles& f = sim.fluid();
+    double v = 0;
+    for (std::size_t i = 0; i < f.size(); ++i) v += f.mass[i] / f.density[i];
+    return v;
+  };
+  json volumeHistory = json::array();
 
   const bool writing = !o.outDir.empty();
   if (writing) fs::create_directories(o.outDir);
@@ -153,6 +197,8 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   if (ctSnapshots) writeCtSnapshot("simulated_ct_start.nrrd", "", nullptr);
   std::vector<std::pair<double, std::string>> snapshots;
   auto writeSnapshot = [&](const imaging::ImageType* ctNow = nullptr) {
+    volumeHistory.push_back({{"time_s", sim.time()}, {"volume_injected_ml", emitter.emittedVolume() * 1e6},
+                             {"cement_volume_ml", cementVolume() * 1e6}});
     if (!writing) return;
     char name[64];
     std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
@@ -175,7 +221,12 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
     viscosity.apply(sim, spec.startTime);
     emitter.emit(sim);
     sim.step();
-    probe.sample(sim);
+    {
+      const double tipPa = outletPressure();
+      const double mu = sim.parameters().viscosity;
+      tipSeries.push_back({sim.time(), tipPa,
+                           sph::hagenPoiseuillePressureDrop(mu, cannulaLength, spec.flowRate, spec.innerDiameter)});
+    }
     if (sim.time() >= nextSnapshot && sim.time() < T) {
       writeSnapshot();
       while (nextSnapshot <= sim.time()) nextSnapshot += scene.snapshotIntervalS;
@@ -220,17 +271,24 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const double escapedMass = double(sim.escapedCount()) * emitter.particleMass();
   const double massBalance = emittedMass > 0 ? (emittedMass - fluidMass - escapedMass) / emittedMass : 0.0;
   double finalPressure = std::numeric_limits<double>::quiet_NaN(), maxPressure = finalPressure, baseline = 0.0;
+  double maxInjection = 0.0;
   bool haveBaseline = false;
-  if (!probe.samples().empty()) {
-    finalPressure = probe.samples().back().meanPressure;
+  if (!tipSeries.empty()) {
+    finalPressure = tipSeries.back().tipPa;
     maxPressure = -std::numeric_limits<double>::infinity();
-    for (const auto& s : probe.samples()) maxPressure = std::max(maxPressure, s.meanPressure);
-    try {
-      baseline = probe.baseline();
-      haveBaseline = true;
-    } catch (const std::logic_error&) {
+    for (const auto& s : tipSeries) {
+      maxPressure = std::max(maxPressure, s.tipPa);
+      maxInjection = std::max(maxInjection, s.tipPa + s.cannulaPa);
+    }
+    if (!incompressible) { // the paper's baseline: the mean of the first 0.5 s (model pressure is relative)
+      try {
+        baseline = probe.baseline();
+        haveBaseline = true;
+      } catch (const std::logic_error&) {
+      }
     }
   }
+  const double finalCannula = tipSeries.empty() ? 0.0 : tipSeries.back().cannulaPa;
 
   // Simulated CT on the CT's grid within the ROI.
   const auto simCt = simulatedCtOnRoi(ct, solid, voxeliser.density(f), o.huPerRelativeDensity, rho0);
@@ -261,6 +319,35 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   metrics["neighbour_rebuilds"] = st.neighbourRebuilds;
   metrics["neighbour_relistings"] = st.relistings;
   metrics["model_preset"] = preset.name;
+  metrics["model"] = choice.model;
+  metrics["model_reason"] = choice.reason;
+  metrics["recommended_pressure_model"] = choice.recommended;
+  metrics["pressure_model"] = m.pressureModel;
+  metrics["resistance"] = m.resistanceName();
+  metrics["viscosity_law"] = m.viscosityLaw;
+  metrics["dimensionless_numbers"] = choice.numbersJson();
+  metrics["pressure_is_physical"] = incompressible; // gauge Pa; the weakly compressible pressure is the model's
+  metrics["cannula_pressure_drop_pa"] = finalCannula;
+  metrics["injection_pressure_pa"] = finiteOrZero(finalPressure) + finalCannula;
+  metrics["max_injection_pressure_pa"] = maxInjection;
+  metrics["cement_volume_ml"] = cementVolume() * 1e6;
+  {
+    json history = volumeHistory; // at every snapshot, and the final state
+    history.push_back({{"time_s", sim.time()}, {"volume_injected_ml", emitter.emittedVolume() * 1e6},
+                       {"cement_volume_ml", cementVolume() * 1e6}});
+    metrics["volume_history"] = history;
+  }
+  if (incompressible) {
+    const auto* darcy = dynamic_cast<const sph::IncompressibleDarcy*>(&sim.pressureModel());
+    const auto& ps = darcy->statistics();
+    metrics["pressure_solves"] = ps.solves;
+    metrics["pressure_solver_iterations_mean"] = ps.solves ? double(ps.iterations) / double(ps.solves) : 0.0;
+    metrics["pressure_solver_worst_residual"] = ps.worstResidual;
+    metrics["pressure_solver_unconverged"] = ps.unconverged;
+    metrics["pressure_solve_wall_s"] = ps.solveSeconds;
+    metrics["front_particles"] = ps.lastFrontParticles;
+    metrics["outlet_source_radius_mm"] = sourceRadius * 1e3;
+  }
   metrics["smoothing_length_mm"] = m.smoothingLength * 1e3;
   metrics["final_tip_pressure_pa"] = finiteOrZero(finalPressure);
   metrics["max_tip_pressure_pa"] = finiteOrZero(maxPressure);
@@ -284,9 +371,11 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
     pvd << "  </Collection>\n</VTKFile>\n";
     imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), pvd.str());
     std::ostringstream csv;
-    csv << "time_s,pressure_pa,pressure_minus_baseline_pa\n" << std::setprecision(10);
-    for (const auto& s : probe.samples())
-      csv << s.time << "," << s.meanPressure << "," << (haveBaseline ? s.meanPressure - baseline : 0.0) << "\n";
+    csv << "time_s,pressure_pa,pressure_minus_baseline_pa,cannula_pressure_drop_pa,injection_pressure_pa\n"
+        << std::setprecision(10);
+    for (const auto& s : tipSeries)
+      csv << s.time << "," << s.tipPa << "," << (incompressible ? s.tipPa : haveBaseline ? s.tipPa - baseline : 0.0)
+          << "," << s.cannulaPa << "," << s.tipPa + s.cannulaPa << "\n";
     imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(), csv.str());
     imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
     imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");

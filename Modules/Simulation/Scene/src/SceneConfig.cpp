@@ -118,6 +118,11 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "fixed_field_spacing_over_h") s.fixedFieldSpacingOverH = number(v, key);
     else if (key == "max_displacement_over_h") s.maxDisplacementOverH = number(v, key);
     else if (key == "neighbour_skin_over_h") s.neighbourSkinOverH = number(v, key);
+    else if (key == "pressure_model") {
+      s.pressureModel = text(v, key);
+      if (s.pressureModel != "auto" && s.pressureModel != "incompressible" && s.pressureModel != "equation-of-state")
+        fail(key, "must be \"auto\", \"incompressible\" or \"equation-of-state\" (got \"" + s.pressureModel + "\")");
+    }
     else
       throw std::invalid_argument("scene: unknown key '" + key + "'");
   }
@@ -235,6 +240,7 @@ json toJson(const SceneConfig& s) {
   if (s.fixedFieldSpacingOverH) j["fixed_field_spacing_over_h"] = *s.fixedFieldSpacingOverH;
   if (s.maxDisplacementOverH) j["max_displacement_over_h"] = *s.maxDisplacementOverH;
   if (s.neighbourSkinOverH) j["neighbour_skin_over_h"] = *s.neighbourSkinOverH;
+  j["pressure_model"] = s.pressureModel;
   return j;
 }
 

@@ -45,6 +45,9 @@ public:
   // The fixed particles the sums run over: binned by `grid` (cells >= the kernel support), cell c's
   // particles are [cellStart[c], cellStart[c+1]). Forgets every computed brick.
   void attach(const FixedParticles* fixed, const CellGrid* grid, const std::vector<std::uint32_t>* cellStart);
+  // Sum the fixed particles' volumes instead of their masses (D is then the solid volume fraction the
+  // incompressible model needs). Set before the first prepare().
+  void weighByVolume(bool byVolume) { byVolume_ = byVolume; }
 
   // Fills the bricks containing the points that are not filled yet. Points must lie inside the domain.
   void prepare(const double* x, const double* y, const double* z, std::size_t n);
@@ -69,6 +72,7 @@ private:
   const std::vector<std::uint32_t>* cellStart_ = nullptr;
   std::vector<std::unique_ptr<FixedSums[]>> bricks_; // null until filled
   std::size_t filled_ = 0;
+  bool byVolume_ = false;
 };
 
 } // namespace cementsph::sph

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -32,6 +33,35 @@ enum class FixedSumMethod {
 // What to do when a user-fixed time step exceeds the scheme's stability limit.
 enum class StepLimitPolicy { Refuse, Clamp };
 
+// A continuum porous medium (bone whose pores the CT does not resolve): porosity phi and permeability k
+// [m^2] at a point [m]. Used by the `permeability` resistance.
+struct Medium {
+  double porosity = 1.0;
+  double permeability = 0.0;
+};
+using MediumField = std::function<Medium(const Eigen::Vector3d& positionM)>;
+
+// Settings of the incompressible Darcy pressure model (Pressure/IncompressibleDarcy.h).
+struct IncompressibleSettings {
+  // A particle whose kernel sum of cement bulk and solid volume (theta) is below this is at the cement
+  // front: marrow pressure (0 gauge) there. A flat free surface of a lattice has theta = 0.85 on its outer
+  // layer and 1.00 one layer in (h = d), so 0.92 separates them with room for disorder.
+  double frontVolumeFraction = 0.92;
+  // ... or whose neighbours are one-sided: |grad theta| h above this (0.51 on a lattice's free surface).
+  double frontGradient = 0.25;
+  // Fraction of a particle's excess volume fraction (theta - 1 > 0) removed per relaxation time: the drift
+  // correction that keeps the cement at its own volume.
+  double volumeCorrection = 0.5;
+  // The relaxation time [s]; 0: the run's maximum time step (an injection's emission interval d^3 / Q), or
+  // the last step if unbounded.
+  double relaxationTime = 0.0;
+  double solverTolerance = 1e-6;    // relative residual of the conjugate-gradient solve
+  int solverMaxIterations = 2000;
+  // Bulk modulus of the cement [Pa], a tiny diagonal term that keeps the system regular where cement has no
+  // front (a closed cavity); PMMA dough is of order 1 GPa, so it does nothing elsewhere.
+  double bulkModulus = 1e9;
+};
+
 struct ModelParameters {
   double restDensity = 1180.0;    // rho0 [kg/m^3], cement (paper)
   double soundSpeed = 1.0;        // cs [m/s], Eq. 6 (paper: 1 m/s)
@@ -40,6 +70,16 @@ struct ModelParameters {
   double dragCoefficient = 1.0;   // Cf, Eq. 9 (dimensionless; calibrated, see VALIDATION.md)
   ViscosityModel viscosityModel = ViscosityModel::Drag;
   Integrator integrator = Integrator::Overdamped;
+  // The interchangeable parts of a step by registered name (ModelRegistry.cpp). Empty: follow
+  // viscosityModel (drag -> paper-drag, else none) and integrator.
+  std::string pressureModel = "equation-of-state"; // or "incompressible"
+  std::string resistance;                          // "paper-drag", "permeability" or "none"
+  std::string viscosityLaw = "newtonian";
+  std::string boundary = "domain-sides";
+  IncompressibleSettings incompressible;
+  // The continuum medium for the `permeability` resistance (unset: uniform `medium`).
+  Medium medium;
+  MediumField mediumField;
   Eigen::Vector3d bodyForce = Eigen::Vector3d::Zero(); // F_B [m/s^2], force per unit mass
 
   // --- time stepping --------------------------------------------------------------------------
@@ -69,9 +109,15 @@ struct ModelParameters {
   double runawaySpeedFactor = 10.0; // a particle faster than this many cs means the run went unstable
 
   // The drag rate gamma = Cf m mu / (rho^2 h^5) [1/s] of Eq. 9.
-  double dragRate(double mass, double density) const {
+  double dragRate(double mass, double density) const { return dragRate(mass, density, viscosity); }
+  double dragRate(double mass, double density, double mu) const {
     const double h = smoothingLength;
-    return dragCoefficient * mass * viscosity / (density * density * h * h * h * h * h);
+    return dragCoefficient * mass * mu / (density * density * h * h * h * h * h);
+  }
+  // The resistance's registered name (resistance, or the one viscosityModel implies).
+  std::string resistanceName() const {
+    if (!resistance.empty()) return resistance;
+    return viscosityModel == ViscosityModel::Drag ? "paper-drag" : "none";
   }
   double pressure(double density) const { return soundSpeed * soundSpeed * (density - restDensity); }
 };

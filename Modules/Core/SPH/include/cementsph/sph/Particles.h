@@ -19,6 +19,13 @@ struct FluidParticles {
   std::vector<double> pressure;   // [Pa], Eq. 6
   std::vector<double> mass;       // [kg]
   std::vector<double> birthTime;  // [s]
+  // Per-particle model fields, so a model may vary in space and time:
+  std::vector<double> viscosity;  // mu [Pa s] (ViscosityLaw)
+  std::vector<double> dragRate;   // gamma [1/s], a = -gamma v (Resistance: Eq. 9 or k/mu)
+  std::vector<double> porosity;   // phi of the medium the particle is in (1 where the pores are resolved)
+  std::vector<double> permeability; // k [m^2] of the medium (continuum resistance; 0 where unused)
+  std::vector<double> volumeFraction; // theta: kernel sum of cement bulk and solid volume (incompressible)
+  std::vector<std::uint8_t> front;    // 1 at the cement front (incompressible: p = 0 there)
   std::vector<std::uint64_t> id;  // stable identity (storage is reordered by cell)
 
   std::size_t size() const { return x.size(); }
@@ -33,25 +40,29 @@ struct FluidParticles {
   // Keeps particles with keep[i] != 0, preserving order. Returns how many were removed.
   std::size_t compact(const std::vector<std::uint8_t>& keep);
   void reserve(std::size_t n);
+  // Every per-particle double field, for permute/compact/reserve (one list, so a new field is not forgotten).
+  std::vector<std::vector<double>*> doubleFields();
 };
 
 // The porous solid. Static: binned once. Density and pressure are one value for the whole set
-// (the paper keeps them fixed), so a fixed particle costs 3 doubles + 1 float = 28 bytes.
+// (the paper keeps them fixed), so a fixed particle costs 3 doubles + 2 floats = 32 bytes.
 struct FixedParticles {
   std::vector<double> x, y, z; // [m]
   std::vector<float> mass;     // [kg]
+  std::vector<float> volume;   // [m^3] the solid volume it stands for (the incompressible model's no-flux solid)
   double density = 1180.0;     // [kg/m^3], kept fixed
   double pressure = 0.0;       // [Pa], kept fixed: EOS at that density
 
   std::size_t size() const { return x.size(); }
-  void add(const Eigen::Vector3d& position, double m) {
+  void add(const Eigen::Vector3d& position, double m, double v) {
     x.push_back(position.x());
     y.push_back(position.y());
     z.push_back(position.z());
     mass.push_back(static_cast<float>(m));
+    volume.push_back(static_cast<float>(v));
   }
   std::size_t bytesUsed() const {
-    return x.capacity() * sizeof(double) * 3 + mass.capacity() * sizeof(float);
+    return x.capacity() * sizeof(double) * 3 + (mass.capacity() + volume.capacity()) * sizeof(float);
   }
 };
 

@@ -1,11 +1,11 @@
-// The particle model of Basafa et al. 2013: weakly compressible SPH with fixed particles for the
-// porous solid.
+// The particle model of Basafa et al. 2013 (weakly compressible SPH with fixed particles for the porous
+// solid) and the models that replace its parts (ModelInterfaces.h, docs/architecture.md).
 //
-// One step: neighbour lists (reused while the skin allows) -> density by summation over fluid and
-// fixed particles (Eq. 2) -> pressure (Eq. 6) -> symmetric pressure force (Eq. 5), body force and, for
-// Morris viscosity, Eq. 7 -> integration (Eq. 8 with the Eq. 9 drag implicit; explicit; or
-// overdamped) -> periodic wrap or removal at open sides -> a health check that stops a run going
-// unstable with a message saying where and why.
+// One step: neighbour lists (reused while the skin allows) -> viscosity law -> pressure model's density
+// (Eq. 2, or the incompressible model's volume fractions) -> resistance (Eq. 9 drag or k/mu) -> pressure
+// (Eq. 6, or the incompressible solve) -> symmetric pressure force (Eq. 5), body force and, for Morris
+// viscosity, Eq. 7 -> integration (Eq. 8 with the Eq. 9 drag implicit; explicit; or overdamped) -> a
+// health check that stops a run going unstable with a message saying where and why -> domain sides.
 //
 // Fixed particles count as fluid particles for the density and pressure of moving ones but keep
 // their own density, pressure, position and (zero) velocity (the paper, "Particle Fluid Model").
@@ -14,10 +14,13 @@
 #include "cementsph/sph/Domain.h"
 #include "cementsph/sph/FixedParticleField.h"
 #include "cementsph/sph/Kernels.h"
+#include "cementsph/sph/ModelInterfaces.h"
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/NeighbourSearch.h"
+#include "cementsph/sph/PairIteration.h"
 #include "cementsph/sph/Particles.h"
 
+#include <memory>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -31,15 +34,14 @@ public:
   using std::runtime_error::runtime_error;
 };
 
-// The time-step limits that apply to the current scheme [s]; +inf where a limit does not apply.
-struct StepLimits {
-  double acoustic;     // C h / cs: explicit pressure term (every scheme but overdamped)
-  double viscous;      // C h^2 / nu: explicit Morris viscosity
-  double drag;         // 1 / gamma_max: explicit drag (the Explicit scheme only)
-  double force;        // C sqrt(h / |a|max)
-  double overdamped;   // C gamma_min h^2 / cs^2: overdamped stability
-  double displacement; // maxDisplacement h / |v|max: overdamped accuracy
-  double stable() const; // the smallest of the stability limits (all but displacement)
+// A volume source [m^3/s] spread over the fluid particles within `radius` of `centre` (the cannula outlet
+// for the incompressible model: the cement enters there at the flow rate).
+struct VolumeSource {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+  double rate = 0.0;
+  // Half-space the source feeds: particles with (x - centre) . axis >= -radius/2 (zero axis: all around).
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
 };
 
 struct StepStatistics {
@@ -57,7 +59,9 @@ public:
 
   // --- set-up ------------------------------------------------------------------------------------
   std::uint64_t addFluidParticle(const Eigen::Vector3d& position, const Eigen::Vector3d& velocity, double mass);
-  void addFixedParticle(const Eigen::Vector3d& position, double mass);
+  // `volume` [m^3]: the solid volume the particle stands for (0: mass / rho0), used by the incompressible
+  // model's volume fractions.
+  void addFixedParticle(const Eigen::Vector3d& position, double mass, double volume = 0.0);
   void reserveFluid(std::size_t n) { fluid_.reserve(n); }
 
   // --- running -----------------------------------------------------------------------------------
@@ -70,8 +74,29 @@ public:
 
   // --- state -------------------------------------------------------------------------------------
   const ModelParameters& parameters() const { return parameters_; }
-  // Viscosity may change during a run (the cement cures); one value for all particles at a time.
+  // The viscosity the viscosity law starts from; it may change during a run (the cement cures).
   void setViscosity(double viscosityPaS);
+  void setVolumeSource(const VolumeSource& source) { source_ = source; }
+  const VolumeSource& volumeSource() const { return source_; }
+  // The models of this run (chosen by name from ModelParameters).
+  PressureModel& pressureModel() { return *pressureModel_; }
+  const PressureModel& pressureModel() const { return *pressureModel_; }
+  const Resistance& resistance() const { return *resistance_; }
+  const ViscosityLaw& viscosityLaw() const { return *viscosityLaw_; }
+  const TimeIntegrator& integrator() const { return *integrator_; }
+  // --- for the models --------------------------------------------------------------------------
+  // The pair iteration over the current lists (PairIteration.h).
+  PairIteration pairs() const;
+  // Eq. 2 over fluid and fixed particles into fluid().density (lists must be up to date).
+  void sumDensity();
+  const CubicSplineKernel& densityKernel() const { return densityKernel_; }
+  const SpikyKernel& pressureKernel() const { return pressureKernel_; }
+  bool tabulatedFixedSums() const { return tabulated_; }
+  // Fills the table's bricks at the fluid particles' positions (tabulated sums; then fixedField().sample).
+  void prepareFixedField() { field_.prepare(fluid_.x.data(), fluid_.y.data(), fluid_.z.data(), fluid_.size()); }
+  double maxDragRate() const;
+  double minDragRate() const;
+  std::uint64_t stepCount() const { return statistics_.steps; }
   void setBodyForce(const Eigen::Vector3d& force) { parameters_.bodyForce = force; }
   const Domain& domain() const { return domain_; }
   const FluidParticles& fluid() const { return fluid_; }
@@ -105,14 +130,9 @@ private:
   void rebuildNeighbourLists();
   template <bool Periodic> void buildLists();
   void buildRelistedLists();
-  template <bool Periodic> void densityPass();
-  template <bool Periodic, bool Morris> void forcePass();
+  template <bool Morris> void forcePass();
   double chooseTimeStep(const StepLimits& limits);
-  void integrate(double dt);
-  void applyBoundaries();
   void checkHealth(double dt) const;
-  double maxDragRate() const;
-  double minDragRate() const;
   std::string describeParticle(std::size_t i) const;
 
   ModelParameters parameters_;
@@ -154,6 +174,18 @@ private:
   StepStatistics statistics_;
   std::vector<std::string> warnings_;
   std::vector<double> pressureOverDensity2_; // p / rho^2 per fluid particle, scratch of the force pass
+  VolumeSource source_;
+  std::unique_ptr<PressureModel> pressureModel_;
+  std::unique_ptr<Resistance> resistance_;
+  std::unique_ptr<ViscosityLaw> viscosityLaw_;
+  std::unique_ptr<TimeIntegrator> integrator_;
+  std::unique_ptr<DomainBoundary> boundary_;
+
+public:
+  std::string describeParticleForModels(std::size_t i) const { return describeParticle(i); }
+  // Time step of Eq. 8 once chosen (central difference), for its integrator.
+  double& centralDifferenceStep() { return centralDifferenceStep_; }
+  const double* minimumImageExtent() const { return extent_; }
 };
 
 } // namespace cementsph::sph

@@ -31,6 +31,8 @@
 //   fixed_field_spacing_over_h      tabulated: grid spacing / h (0..1]                      0.25
 //   max_displacement_over_h         overdamped: largest move per step / h (0..1]           0.25
 //   neighbour_skin_over_h           Verlet skin / h (0..2]                                 model preset
+//   pressure_model "auto"|"incompressible"|"equation-of-state"   the pressure model; auto chooses from the
+//                                   scene's dimensionless numbers (ModelSelection.h)        auto
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
 #pragma once
@@ -72,6 +74,7 @@ struct SceneConfig {
   std::optional<std::string> integrator;
   std::optional<std::string> fixedParticleSums;
   std::optional<double> fixedFieldSpacingOverH, maxDisplacementOverH, neighbourSkinOverH;
+  std::string pressureModel = "auto";
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
