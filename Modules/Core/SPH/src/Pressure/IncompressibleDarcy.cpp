@@ -214,7 +214,7 @@ void IncompressibleDarcy::pressure(Simulation& sim) {
     }
     for (std::size_t i : fed) b[Eigen::Index(i)] += src.rate / f.porosity[i] * bulk_[i] / fedBulk;
   }
-  const double K = settings_.bulkModulus;
+  const double shift = settings_.regularisation;
   std::size_t nnz = n;
   for (const auto& t : perThread) nnz += t.size();
   nnz += mirrored.size();
@@ -230,12 +230,17 @@ void IncompressibleDarcy::pressure(Simulation& sim) {
       d += bulk_[i] * lambda[i] *
            std::max(0.0, gamma_ - presentSum_[i] / (latticeFactor_ * std::max(1.0, f.volumeFraction[i])));
     if (std::isfinite(tau)) {
-      const double excess = std::max(0.0, f.volumeFraction[i] - 1.0);
+      // Inside the cement both signs are corrected (a hole closes as an excess spreads); at the front only
+      // an excess (a front particle's kernel is cut by the marrow, its theta < 1 is no hole).
+      const double excess = f.front[i] ? std::max(0.0, f.volumeFraction[i] - 1.0) : f.volumeFraction[i] - 1.0;
       b[r] += bulk_[i] * settings_.volumeCorrection * excess / tau;
-      d += bulk_[i] / (K * tau);
-      b[r] += bulk_[i] * f.pressure[i] / (K * tau);
     }
     if (!(d > 0)) d = bulk_[i] * lambda[i] * gamma_; // an isolated particle: couple it to the marrow
+    // Regularisation: a relative diagonal shift that pulls towards the last pressure. It keeps the system
+    // positive definite where cement has no front (a closed cavity) and, being relative, keeps the solve
+    // exactly proportional to the viscosity (Darcy: p ~ mu at a fixed flow).
+    b[r] += shift * d * f.pressure[i];
+    d *= 1.0 + shift;
     all.emplace_back(int(i), int(i), d);
     x0[r] = f.pressure[i];
   }

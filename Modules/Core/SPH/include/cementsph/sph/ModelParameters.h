@@ -51,15 +51,15 @@ struct IncompressibleSettings {
   double frontGradient = 0.25;
   // Fraction of a particle's excess volume fraction (theta - 1 > 0) removed per relaxation time: the drift
   // correction that keeps the cement at its own volume.
-  double volumeCorrection = 0.5;
+  double volumeCorrection = 0.1;
   // The relaxation time [s]; 0: the run's maximum time step (an injection's emission interval d^3 / Q), or
   // the last step if unbounded.
   double relaxationTime = 0.0;
   double solverTolerance = 1e-6;    // relative residual of the conjugate-gradient solve
   int solverMaxIterations = 2000;
-  // Bulk modulus of the cement [Pa], a tiny diagonal term that keeps the system regular where cement has no
-  // front (a closed cavity); PMMA dough is of order 1 GPa, so it does nothing elsewhere.
-  double bulkModulus = 1e9;
+  // Relative diagonal shift towards the last pressure: keeps the system regular where cement has no front
+  // (a closed cavity: the pressure then climbs step by step, as into a stiff, nearly incompressible fill).
+  double regularisation = 1e-9;
 };
 
 struct ModelParameters {

@@ -54,7 +54,9 @@ struct FixedParticles {
   double pressure = 0.0;       // [Pa], kept fixed: EOS at that density
 
   std::size_t size() const { return x.size(); }
-  void add(const Eigen::Vector3d& position, double m, double v) {
+  // v: the solid volume [m^3] (0: m / density).
+  void add(const Eigen::Vector3d& position, double m, double v = 0.0) {
+    if (v <= 0) v = m / density;
     x.push_back(position.x());
     y.push_back(position.y());
     z.push_back(position.z());

@@ -2,7 +2,7 @@
 // cement in a porous solid: docs/architecture.md, "Choosing a model").
 //
 // Assumptions: inertia negligible (Re << 1, Stokes number << 1), the cement incompressible (its bulk
-// modulus, ~1 GPa, far above any injection pressure), Darcy's law at particle scale: the particle velocity
+// modulus, of order 1 GPa for PMMA dough, far above any injection pressure), Darcy's law at particle scale: the particle velocity
 // is v = -lambda grad p with the mobility lambda = 1 / (rho0 gamma) from the resistance (Eq. 9: k0 / mu,
 // k0 = h^5 / (Cf d^3); a permeability field: k / (phi mu)). The marrow ahead of the cement is at 0 gauge
 // pressure and offers no resistance (cement/marrow viscosity ratio ~1e3-1e4); capillarity is neglected.
@@ -15,7 +15,7 @@
 //       (L p)_i = sum_j Omega_j lambda_ij G_ij (p_i - p_j),  G_ij = -2 r W'(r) / (r^2 + 0.01 h^2) >= 0,
 //     is set equal to the divergence the particle's volume needs: the source (the cannula's flow rate Q over
 //     the particles at the outlet, Q / phi of bulk per second) plus the drift correction
-//     volumeCorrection (theta_i - 1)+ / dt. Solid neighbours are absent from the sum: no flux into solid.
+//     volumeCorrection (theta_i - 1) / tau (inside; at the front only an excess). Solid neighbours are absent from the sum: no flux into solid.
 //     Front particles couple to the marrow (p = 0) through the part of a full kernel's sum they miss,
 //     Omega_i lambda_i (Gamma - sum_present Omega_j G_ij), Gamma the sum of a full lattice: the Dirichlet
 //     condition sits where their missing neighbours would be. Multiplied by Omega_i the system is symmetric
