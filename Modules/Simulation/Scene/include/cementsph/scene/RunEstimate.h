@@ -28,11 +28,12 @@ struct RunEstimate {
 // voxelVolumeMm3: the CT's voxel volume (0 when not known yet: the solid is then left out).
 RunEstimate estimateRun(const SceneConfig& scene, double voxelVolumeMm3 = 0);
 
-// Limits: memory above half the machine's RAM (above all of it even with allowLarge), or more than
-// kMaxParticleSteps of work, throws std::invalid_argument with one line (what, how much, which key to change,
-// and --allow-large where that helps). Returns a note for runs long enough to say so (empty otherwise).
-constexpr double kMaxParticleSteps = 2e10;  // about 3 hours at the rate below
-constexpr double kNoteParticleSteps = 2e8;  // about 2 minutes
+// Limits: memory above half the machine's RAM (above all of it even with allowLarge), or an estimated wall
+// time over kMaxEstimatedSeconds, throws std::invalid_argument with one line (what, how much, which key to
+// change, and --allow-large where that helps). Returns a note for runs estimated over kNoteEstimatedSeconds
+// (empty otherwise). The time is the work over a rate measured on a slow machine (RunEstimate.cpp).
+constexpr double kMaxEstimatedSeconds = 3 * 3600.0;
+constexpr double kNoteEstimatedSeconds = 120.0;
 std::string checkRunSize(const RunEstimate& estimate, bool allowLarge);
 
 // Physical memory of this machine in bytes.
