@@ -37,7 +37,7 @@ void capThreadsOption(CLI::App& sub) {
         } catch (const std::exception&) {
           return "must be a whole number of threads (got '" + value + "')";
         }
-        if (n < 0) return "must be 0 (the free cores) or more (got " + value + ")";
+        if (n < 0) return value + " is negative (0: the cores the load average leaves free)";
         value = std::to_string(std::min<long>(n, omp_get_num_procs()));
         return {};
       },
