@@ -47,11 +47,32 @@ void requireAll(const std::vector<double>& v, const char* what, bool (*ok)(doubl
     }
 }
 
+void requireWithin(double x, double lo, double hi, const char* what, const char* why) {
+  if (!(x >= lo && x <= hi)) {
+    std::ostringstream s;
+    s << what << ": " << x << " is outside " << lo << ".." << hi << " (" << why << ")";
+    throw std::invalid_argument(s.str());
+  }
+}
+
 int runDarcy(const DarcyOptions& o) {
-  requireAll(o.porosities, "--porosities", [](double p) { return p > 0 && p <= 1; });
-  requireAll(o.spacingsMm, "--spacings-mm", [](double d) { return d > 0; });
-  requireAll(o.viscositiesPaS, "--viscosities-pa-s", [](double m) { return m > 0; });
+  // Porosity 1 leaves no solid: the permeability is infinite, not a number for the CSV.
+  requireAll(o.porosities, "--porosities", [](double p) { return p > 0 && p < 1; });
+  requireAll(o.spacingsMm, "--spacings-mm", [](double d) { return d >= 1e-3 && d <= 100; });
+  requireAll(o.viscositiesPaS, "--viscosities-pa-s", [](double m) { return m > 0 && m <= 1e7; });
+  if (!o.bodyForces.empty())
+    requireAll(o.bodyForces, "--body-forces-m-per-s2", [](double f) { return f > 0 && f <= 1e6; });
   if (o.lattice < 4) throw std::invalid_argument("--lattice: at least 4 particles per side");
+  requireWithin(o.lattice, 4, 200, "--lattice", "200^3 particles is the most this benchmark runs");
+  // A tolerance of 0 is never met: every body force would run to the step cap.
+  requireWithin(o.tolerance, 1e-5, 0.5, "--steady-tolerance", "relative change between windows");
+  requireWithin(double(o.maxSteps), 1, 1e7, "--max-steps-per-force", "steps for one body force");
+  // Below a picosecond the step count of a run overflows; the stability limits refuse the large end.
+  if (o.timeStep != 0) requireWithin(o.timeStep, 1e-12, 10, "--time-step-s", "a fixed time step in seconds");
+  const std::pair<double, const char*> positive[] = {
+      {o.hOverD, "--h-over-d"}, {o.dragCoefficient, "--drag-coefficient"}, {o.soundSpeed, "--sound-speed-m-per-s"}};
+  for (const auto& [x, option] : positive)
+    if (!std::isfinite(x) || x < 0) throw std::invalid_argument(std::string(option) + ": must be a finite number > 0");
   if (o.threads > 0) omp_set_num_threads(o.threads);
 
   ModelPreset preset = modelPreset(o.preset);
@@ -118,7 +139,7 @@ int runDarcy(const DarcyOptions& o) {
   }
   bool allConverged = true;
   for (const DarcyResult& r : results) allConverged = allConverged && r.converged;
-  return allConverged ? 0 : 3;
+  return allConverged ? 0 : 2; // a failed run (README, "Exit status")
 }
 
 app::CommandRunner setupDarcy(CLI::App& sub) {

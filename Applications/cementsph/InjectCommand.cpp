@@ -12,6 +12,7 @@
 
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/RunEstimate.h"
 #include "cementsph/scene/SceneConfig.h"
 #include "vtkSPHInjectionFilter.h"
 
@@ -33,6 +34,7 @@ struct InjectArgs {
   int threads = 0;
   bool quiet = false;
   bool noPictures = false;
+  bool allowLarge = false;
 };
 
 cementsph::app::CommandRunner setupInject(CLI::App& sub) {
@@ -44,6 +46,8 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   cementsph::app::addSceneOverrideOptions(sub, a->overrides);
   sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--quiet", a->quiet, "No progress line");
+  sub.add_flag("--allow-large", a->allowLarge,
+               "Run even when the estimated work is hours (or memory over half the RAM); docs: README 'Bad input'");
   sub.add_flag("--no-pictures", a->noPictures,
                "Do not write tip_pressure.png (Fig. 10) nor, with simulated_ct_snapshots, the X-ray sequence "
                "in DIR/xray (Fig. 12)");
@@ -53,7 +57,12 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
         cementsph::scene::loadSceneFile(a->scene, cementsph::app::sceneOverrides(sub, a->overrides));
     if (a->threads > 0) omp_set_num_threads(a->threads);
     // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files.
-    const auto ct = cementsph::imaging::toVtk(cementsph::imaging::readVolume(a->ct));
+    const auto image = cementsph::imaging::readVolume(a->ct);
+    const auto spacing = image->GetSpacing();
+    const std::string note = cementsph::scene::checkRunSize(
+        cementsph::scene::estimateRun(scene, spacing[0] * spacing[1] * spacing[2]), a->allowLarge);
+    if (!note.empty() && !a->quiet) std::cerr << "cementsph inject: " << note << "\n";
+    const auto ct = cementsph::imaging::toVtk(image);
     auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
     filter->SetInputDataObject(0, ct);
     filter->SetScene(scene);

@@ -1,6 +1,8 @@
 #include "SceneOverrides.h"
 
+#include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace cementsph::app {
 
@@ -22,6 +24,17 @@ void addSceneOverrideOptions(CLI::App& sub, SceneOverrideArgs& a) {
 }
 
 std::vector<std::string> sceneOverrides(const CLI::App& sub, const SceneOverrideArgs& a) {
+  // A non-finite number is the option's fault, not the scene file's: name the option.
+  auto requireFinite = [](const char* option, const std::vector<double>& values) {
+    for (double x : values)
+      if (!std::isfinite(x))
+        throw std::invalid_argument(std::string(option) + ": " + exactNumber(x) + " is not a finite number");
+  };
+  requireFinite("--tip-mm", a.tipMm);
+  requireFinite("--volume-ml", {a.volumeMl});
+  requireFinite("--flow-rate-ml-per-s", {a.flowRateMlPerS});
+  requireFinite("--viscosity-pa-s", {a.viscosityPaS});
+  requireFinite("--snapshot-interval-s", {a.snapshotIntervalS});
   // Flags given on the command line override the scene file (and --set), in this order.
   std::vector<std::string> overrides = a.set;
   if (!a.tipMm.empty())

@@ -14,6 +14,7 @@
 
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/RunEstimate.h"
 #include "cementsph/scene/SceneConfig.h"
 #include "cementsph/study/StudyPlots.h"
 #include "cementsph/study/StudyReport.h"
@@ -45,6 +46,7 @@ struct StudyArgs {
   std::vector<double> viscositiesPaS;
   bool noSizeStudy = false, noRegistration = false, keepRuns = false, noPictures = false;
   int threads = 0;
+  bool allowLarge = false;
 };
 
 // Refuses, before anything runs, an output path that is a file or lies under a folder we cannot write.
@@ -110,6 +112,7 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
   sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--keep-runs", a->keepRuns, "Keep every run's inject outputs in DIR/runs/<integrator>_r<radius>mm");
   sub.add_flag("--no-pictures", a->noPictures, "Do not write the PNG plots");
+  sub.add_flag("--allow-large", a->allowLarge, "Run even when a run's estimated work is hours (see inject --allow-large)");
 
   return [a, &sub]() {
     const auto start = std::chrono::steady_clock::now();
@@ -131,6 +134,16 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
     checkOutputFolder(out);
     if (a->threads > 0) omp_set_num_threads(a->threads);
     const auto ct = imaging::readVolume(a->ct);
+    {
+      const auto spacing = ct->GetSpacing();
+      std::vector<study::StudyRunSpec> runs = plan.sizeStudy ? plan.sizeRuns() : std::vector<study::StudyRunSpec>{};
+      for (const auto& run : plan.viscosityRuns()) runs.push_back(run);
+      for (const auto& run : runs) {
+        const std::string note = scene::checkRunSize(
+            scene::estimateRun(run.scene(plan.baseScene), spacing[0] * spacing[1] * spacing[2]), a->allowLarge);
+        if (!note.empty()) std::cerr << "cementsph study: run " << run.name() << ": " << note << "\n";
+      }
+    }
     study::StudyOptions options;
     if (a->keepRuns) options.keepRunsDir = (out / "runs").string();
     study::StudyRunner runner(ct, plan, options);

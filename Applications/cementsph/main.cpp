@@ -1,7 +1,13 @@
 // cementsph: the command-line front end. `cementsph --help` lists the subcommands.
 #include "CommandRegistry.h"
 
+#include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/LibraryMessages.h"
+
 #include <omp.h>
+
+#include <csignal>
+#include <new>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +19,32 @@
 #include <stdexcept>
 
 namespace cementsph::app {
+
+namespace {
+
+// --threads N beyond the machine's cores only oversubscribes it (and 100000 threads exhausted the
+// process: a segfault), so every subcommand's --threads is capped at the cores; negative is an error.
+void capThreadsOption(CLI::App& sub) {
+  CLI::Option* threads = sub.get_option_no_throw("--threads");
+  if (!threads) return;
+  threads->transform(CLI::Validator(
+      [](std::string& value) -> std::string {
+        long n = 0;
+        try {
+          std::size_t used = 0;
+          n = std::stol(value, &used);
+          if (used != value.size()) return "must be a whole number of threads (got '" + value + "')";
+        } catch (const std::exception&) {
+          return "must be a whole number of threads (got '" + value + "')";
+        }
+        if (n < 0) return value + " is negative (0: the cores the load average leaves free)";
+        value = std::to_string(std::min<long>(n, omp_get_num_procs()));
+        return {};
+      },
+      "", "cap at the cores"));
+}
+
+} // namespace
 
 std::vector<Command>& CommandRegistry::commands() {
   static std::vector<Command> all;
@@ -29,6 +61,7 @@ int CommandRegistry::run(const std::string& name, std::vector<std::string> args)
     if (command.name != name) continue;
     CLI::App sub{command.summary, name};
     const auto runner = command.setup(sub);
+    capThreadsOption(sub);
     std::reverse(args.begin(), args.end()); // CLI11 takes a vector in reverse order
     sub.parse(args);
     return runner();
@@ -45,23 +78,41 @@ namespace {
 // cores busy, a full team's barriers wait on descheduled threads: measured on this 2-core machine with
 // two other busy processes, the 5 ml injection took 83 s on 2 threads against 10 s on 1.
 void chooseDefaultThreads() {
-  if (std::getenv("OMP_NUM_THREADS")) return;
+  const int cores = omp_get_num_procs();
+  if (const char* fromEnvironment = std::getenv("OMP_NUM_THREADS")) {
+    // Capped as --threads is (capThreadsOption).
+    if (std::atol(fromEnvironment) > cores) omp_set_num_threads(cores);
+    return;
+  }
   double load = 0.0;
   if (getloadavg(&load, 1) != 1) return;
-  const int cores = omp_get_num_procs();
   omp_set_num_threads(std::clamp(static_cast<int>(std::lround(cores - load)), 1, cores));
 }
+
+// Exit status (README, "Exit status"): 0 done; 1 bad input or options (one line naming which); 2 the run
+// failed (out of memory, a file that could not be written: disk full, ...); 3 a picture failed (the
+// numbers were written), as the subcommands return themselves.
+constexpr int kBadInput = 1, kFailedRun = 2;
+
+// One line: the message with its line breaks turned into spaces (library messages can hold several).
+std::string singleLine(const std::string& text) { return cementsph::imaging::oneLine(text); }
 
 } // namespace
 
 int main(int argc, char** argv) {
   using namespace cementsph::app;
+  // A file over the size limit (ulimit -f) fails the write with EFBIG, reported as a failed run, instead of
+  // SIGXFSZ killing the process with a partial file.
+  std::signal(SIGXFSZ, SIG_IGN);
   chooseDefaultThreads();
   CLI::App app{"CementSPH: predicts how PMMA bone cement spreads through porous bone (SPH, "
                "Basafa et al. 2013) and checks it against CT.",
                "cementsph"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "cementsph 0.1.0");
+  bool verbose = false;
+  app.add_flag("--verbose", verbose, "Let GDCM, ITK and VTK print their own warnings and errors to stderr");
+  app.fallthrough(); // --verbose also after the subcommand's name
 
   auto& commands = CommandRegistry::commands();
   std::sort(commands.begin(), commands.end(),
@@ -70,22 +121,44 @@ int main(int argc, char** argv) {
   for (const Command& command : commands) {
     CLI::App* sub = app.add_subcommand(command.name, command.summary);
     runners[sub] = command.setup(*sub);
+    capThreadsOption(*sub);
   }
 
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One line naming the option, and where the options are listed; not CLI11's own exit codes (105-114).
+    std::string name = "cementsph";
+    for (const CLI::App* sub : app.get_subcommands()) name += " " + sub->get_name();
+    std::cerr << name << ": error: " << singleLine(e.what()) << " (see " << name << " --help)\n";
+    return kBadInput;
   }
+  cementsph::imaging::setLibraryMessagesVerbose(verbose);
 
   for (auto& [sub, run] : runners) {
     if (!sub->parsed()) continue;
+    const std::string prefix = "cementsph " + sub->get_name() + ": error: ";
     try {
       return run();
+    } catch (const CLI::ParseError& e) { // a subcommand run by another one (demo: inject, compare)
+      std::cerr << prefix << singleLine(e.what()) << "\n";
+      return kBadInput;
+    } catch (const std::bad_alloc&) {
+      std::cerr << prefix << "out of memory (a smaller volume, region or particle count needs less)\n";
+      return kFailedRun;
+    } catch (const cementsph::imaging::OutputError& e) {
+      std::cerr << prefix << singleLine(e.what()) << "\n";
+      return kFailedRun;
     } catch (const std::exception& e) {
-      std::cerr << "cementsph " << sub->get_name() << ": error: " << e.what() << "\n";
-      return 1;
+      std::cerr << prefix << singleLine(e.what()) << "\n";
+      return kBadInput;
     }
   }
-  return 1;
+  return kBadInput;
 }

@@ -40,6 +40,8 @@ void writeAtomically(const std::string& path,
   try {
     write(tmp);
     std::error_code ec;
+    const auto size = fs::file_size(tmp, ec);
+    if (ec || size == 0) throw std::runtime_error("the writer left no data (disk full?)");
     fs::rename(tmp, path, ec);
     if (ec) throw std::runtime_error("cannot rename into place: " + ec.message());
   } catch (const std::exception& e) {
@@ -47,8 +49,7 @@ void writeAtomically(const std::string& path,
     fs::remove(tmp, ignored);
     const std::string what = e.what();
     // Do not repeat the path if the writer already named it.
-    if (what.find(path) != std::string::npos) throw;
-    throw std::runtime_error(path + ": " + what);
+    throw OutputError(what.find(path) != std::string::npos ? what : path + ": " + what);
   }
 }
 
@@ -58,8 +59,43 @@ void writeTextAtomically(const std::string& path, const std::string& text) {
     if (!out) throw std::runtime_error("cannot open for writing");
     out << text;
     out.close();
-    if (!out) throw std::runtime_error("write failed (disk full?)");
+    if (!out) throw std::runtime_error("write failed (disk full or over the file size limit?)");
   });
+}
+
+namespace {
+
+bool matchesNumbered(const std::string& name, const std::string& pattern) {
+  if (name.size() != pattern.size()) return false;
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    if (pattern[i] == '#' ? !std::isdigit(static_cast<unsigned char>(name[i])) : name[i] != pattern[i]) return false;
+  }
+  return true;
+}
+
+// "a.tmp-123-4.nrrd" (writeAtomically) or "a.csv.tmp-123" (older writers): ".tmp-" then a digit.
+bool isTemporary(const std::string& name) {
+  const auto at = name.find(".tmp-");
+  return at != std::string::npos && at + 5 < name.size() && std::isdigit(static_cast<unsigned char>(name[at + 5]));
+}
+
+} // namespace
+
+std::size_t removeStaleOutputs(const std::string& directory, const std::vector<std::string>& numberedPatterns) {
+  std::error_code ec;
+  if (!fs::is_directory(directory, ec)) return 0;
+  std::vector<fs::path> stale;
+  for (fs::directory_iterator it(directory, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file(ec)) continue;
+    const std::string name = it->path().filename().string();
+    bool remove = isTemporary(name);
+    for (const std::string& pattern : numberedPatterns) remove = remove || matchesNumbered(name, pattern);
+    if (remove) stale.push_back(it->path());
+  }
+  std::size_t removed = 0;
+  for (const fs::path& p : stale)
+    if (fs::remove(p, ec)) ++removed;
+  return removed;
 }
 
 } // namespace cementsph::imaging

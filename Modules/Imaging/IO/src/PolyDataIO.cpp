@@ -18,7 +18,9 @@ void writePolyData(vtkPolyData* surface, const std::string& path) {
     writer->SetInputData(surface);
     writer->SetDataModeToAppended();
     writer->SetCompressorTypeToZLib();
-    if (writer->Write() != 1) throw std::runtime_error("VTK could not write the surface");
+    // VTK reports a full disk through the error code only (Write() still returns 1).
+    if (writer->Write() != 1 || writer->GetErrorCode() != 0)
+      throw std::runtime_error("VTK could not write the surface (disk full or over the file size limit?)");
   });
 }
 

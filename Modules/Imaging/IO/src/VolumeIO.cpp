@@ -1,9 +1,12 @@
 #include "cementsph/imaging/VolumeIO.h"
 
 #include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/DicomInput.h"
+#include "cementsph/imaging/LibraryMessages.h"
+
+#include "VolumeFileChecks.h"
 
 #include <itkGDCMImageIO.h>
-#include <itkGDCMSeriesFileNames.h>
 #include <itkImageFileReader.h>
 #include <itkImageFileWriter.h>
 #include <itkImageSeriesReader.h>
@@ -11,11 +14,10 @@
 #include <itkNiftiImageIO.h>
 #include <itkNrrdImageIO.h>
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <cctype>
 #include <iostream>
 #include <memory>
@@ -90,85 +92,148 @@ itk::ImageIOBase::Pointer imageIOForExtension(const std::string& path) {
   return nullptr;
 }
 
+// Sane ranges for a CT read from disk: spacings of a micrometre to 10 cm, at most 2^30 voxels (4 GiB of
+// float). A header outside them is damaged or not a CT; refusing it here keeps a 1e300 spacing or a
+// 10^12-voxel claim from reaching the registration, the particle model or the allocator.
+constexpr double kMinSpacingMm = 1e-3, kMaxSpacingMm = 100.0;
+constexpr double kMaxVoxels = 1073741824.0;
+
+std::string sizeText(const std::array<std::size_t, 3>& size) {
+  return std::to_string(size[0]) + "x" + std::to_string(size[1]) + "x" + std::to_string(size[2]);
+}
+
+void checkGeometry(const std::string& path, const std::array<std::size_t, 3>& size, const double* spacing,
+                   const double* origin, const double* direction) {
+  for (unsigned i = 0; i < 3; ++i)
+    if (size[i] < 2) throw std::runtime_error(path + ": not a 3-D volume (size " + sizeText(size) + ")");
+  if (double(size[0]) * double(size[1]) * double(size[2]) > kMaxVoxels)
+    throw std::runtime_error(path + ": " + sizeText(size) + " voxels is more than this program reads (2^30)");
+  for (unsigned i = 0; i < 3; ++i)
+    if (!(spacing[i] >= kMinSpacingMm && spacing[i] <= kMaxSpacingMm)) {
+      std::ostringstream s;
+      s << path << ": voxel spacing " << spacing[i] << " mm is outside " << kMinSpacingMm << ".." << kMaxSpacingMm
+        << " mm (damaged header?)";
+      throw std::runtime_error(s.str());
+    }
+  for (unsigned i = 0; i < 3; ++i)
+    if (!std::isfinite(origin[i]) || std::abs(origin[i]) > 1e7)
+      throw std::runtime_error(path + ": the origin is not a finite position within 10 km (damaged header?)");
+  for (unsigned i = 0; i < 9; ++i)
+    if (!std::isfinite(direction[i])) throw std::runtime_error(path + ": the direction matrix is not finite");
+  double det = direction[0] * (direction[4] * direction[8] - direction[5] * direction[7]) -
+               direction[1] * (direction[3] * direction[8] - direction[5] * direction[6]) +
+               direction[2] * (direction[3] * direction[7] - direction[4] * direction[6]);
+  if (!(std::abs(det) > 1e-6)) throw std::runtime_error(path + ": the direction matrix is singular");
+}
+
 void checkVolume(const std::string& path, const ImageType* image) {
-  const auto size = image->GetLargestPossibleRegion().GetSize();
-  for (unsigned i = 0; i < 3; ++i)
-    if (size[i] < 2)
-      throw std::runtime_error(path + ": not a 3-D volume (size " + std::to_string(size[0]) + "x" +
-                               std::to_string(size[1]) + "x" + std::to_string(size[2]) + ")");
-  for (unsigned i = 0; i < 3; ++i)
-    if (!(image->GetSpacing()[i] > 0.0))
-      throw std::runtime_error(path + ": non-positive voxel spacing");
+  const VolumeGeometry g = geometryOf(image);
+  checkGeometry(path, g.size, g.spacing.data(), g.origin.data(), g.direction.data());
+  const float* voxels = image->GetBufferPointer();
+  const std::size_t n = g.size[0] * g.size[1] * g.size[2];
+  for (std::size_t k = 0; k < n; ++k)
+    if (!std::isfinite(voxels[k])) {
+      const std::size_t x = k % g.size[0], y = k / g.size[0] % g.size[1], z = k / (g.size[0] * g.size[1]);
+      throw std::runtime_error(path + ": voxel (" + std::to_string(x) + "," + std::to_string(y) + "," +
+                               std::to_string(z) + ") is " + (std::isnan(voxels[k]) ? "NaN" : "infinite") +
+                               "; a CT must hold finite values");
+    }
 }
 
 ImageType::Pointer readDicomSeries(const std::string& directory) {
-  auto names = itk::GDCMSeriesFileNames::New();
-  names->SetUseSeriesDetails(true);
-  names->SetDirectory(directory);
-  const auto& uids = names->GetSeriesUIDs();
-  if (uids.empty()) throw std::runtime_error(directory + ": directory holds no DICOM series");
-  // Several series: take the one with the most slices (the volume, not a scout).
-  std::vector<std::string> files;
-  for (const auto& uid : uids) {
-    auto candidate = names->GetFileNames(uid);
-    if (candidate.size() > files.size()) files = candidate;
-  }
-  if (files.size() < 2)
-    throw std::runtime_error(directory + ": DICOM series has " + std::to_string(files.size()) +
-                             " slice(s); a 3-D volume needs at least 2");
+  // Our own header checks first (DicomInput.h): GDCM aborts the process on some files, and ITK would read
+  // a mixed or gappy folder as one volume.
+  const std::vector<std::string> files = ctSeriesFiles(directory);
   using Reader = itk::ImageSeriesReader<ImageType>;
   auto reader = Reader::New();
   auto io = itk::GDCMImageIO::New(); // applies Rescale Slope/Intercept: float output is HU
   reader->SetImageIO(io);
   reader->SetFileNames(files);
+  StderrCapture quiet;
   reader->Update();
   return reader->GetOutput();
 }
 
-// ITK reports a truncated NRRD, but reads truncated NIfTI files without an error (nifti_io only
-// prints to stderr) and MetaIO only prints "data not read completely" to std::cerr. So: NIfTI is
-// checked for size (gzip streams are decompressed to the end, which also catches a corrupt stream),
-// and MetaImage reads run with std::cerr captured; anything MetaIO says is taken as an error.
-constexpr std::uintmax_t kNiftiHeaderBytes = 348;
-
-void checkNiftiComplete(const std::string& path, std::uintmax_t imageBytes) {
-  const std::string ext = fullExtension(path);
-  std::uintmax_t available = 0;
-  if (ext == ".nii") {
-    available = fs::file_size(path);
-  } else if (ext == ".nii.gz") {
-    gzFile gz = gzopen(path.c_str(), "rb");
-    if (!gz) throw std::runtime_error(path + ": cannot open");
-    std::vector<char> buffer(1 << 16);
-    int n = 0;
-    while ((n = gzread(gz, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0)
-      available += static_cast<std::uintmax_t>(n);
-    int code = Z_OK;
-    const std::string message = n < 0 ? gzerror(gz, &code) : "";
-    gzclose(gz);
-    if (n < 0) throw std::runtime_error(path + ": corrupt or truncated gzip stream: " + message);
-  } else {
-    return;
-  }
-  if (available < imageBytes + kNiftiHeaderBytes)
-    throw std::runtime_error(path + ": truncated (" + std::to_string(available) + " bytes of data, "
-                             "at least " + std::to_string(imageBytes + kNiftiHeaderBytes) +
-                             " expected)");
+detail::VolumeFormat formatOf(const itk::ImageIOBase* io) {
+  if (dynamic_cast<const itk::MetaImageIO*>(io)) return detail::VolumeFormat::MetaImage;
+  if (dynamic_cast<const itk::NiftiImageIO*>(io)) return detail::VolumeFormat::Nifti;
+  return detail::VolumeFormat::Nrrd;
 }
 
-// Redirects std::cerr into a string for its lifetime (not thread-safe: reads are sequential here).
-class CerrCapture {
-public:
-  CerrCapture() : old_(std::cerr.rdbuf(captured_.rdbuf())) {}
-  ~CerrCapture() { std::cerr.rdbuf(old_); }
-  CerrCapture(const CerrCapture&) = delete;
-  CerrCapture& operator=(const CerrCapture&) = delete;
-  std::string text() const { return captured_.str(); }
+// The DICOM preamble: "DICM" at byte 128 (files without it are only recognised by their extension).
+bool hasDicomMagic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {0, 0, 0, 0};
+  in.seekg(128);
+  in.read(magic, 4);
+  return in.gcount() == 4 && std::string(magic, 4) == "DICM";
+}
 
-private:
-  std::ostringstream captured_;
-  std::streambuf* old_;
-};
+ImageType::Pointer readVolumeFile(const std::string& path) {
+  // GDCM is never given a single file: GDCMImageIO's CanReadFile already parses it, and GDCM asserts on
+  // some files. A DICOM file is diagnosed from its header instead (a volume is a folder of slices).
+  const std::string ext = fullExtension(path);
+  if (ext == ".dcm" || ext == ".dicom" || ext == ".ima" || fs::path(path).filename() == "DICOMDIR")
+    refuseSingleDicomFile(path);
+  itk::ImageIOBase::Pointer io = imageIOForExtension(path);
+  if (!io || !io->CanReadFile(path.c_str())) {
+    // Unknown extension or content that does not match it: try every format we know.
+    io = nullptr;
+    const std::vector<itk::ImageIOBase::Pointer> candidates{itk::NrrdImageIO::New().GetPointer(),
+                                                            itk::MetaImageIO::New().GetPointer(),
+                                                            itk::NiftiImageIO::New().GetPointer()};
+    for (const auto& candidate : candidates)
+      if (candidate->CanReadFile(path.c_str())) {
+        io = candidate;
+        break;
+      }
+  }
+  if (!io) {
+    if (hasDicomMagic(path)) refuseSingleDicomFile(path);
+    throw std::runtime_error(path + ": not a readable image (corrupt, or not DICOM, NRRD, MetaImage or NIfTI)");
+  }
+  const detail::VolumeFormat format = formatOf(io);
+  detail::checkHeaderBeforeItk(path, format);
+  std::string messages;
+  {
+    StderrCapture capture; // MetaIO and nifti_io write their complaints to stderr
+    io->SetFileName(path);
+    io->ReadImageInformation();
+    messages = capture.release();
+  }
+  if (format == detail::VolumeFormat::MetaImage && !oneLine(messages).empty())
+    throw std::runtime_error(path + ": corrupt MetaImage header (" + oneLine(messages) + ")");
+  if (io->GetNumberOfDimensions() != 3)
+    throw std::runtime_error(path + ": not a 3-D volume (" + std::to_string(io->GetNumberOfDimensions()) +
+                             "-D image)");
+  if (io->GetNumberOfComponents() != 1)
+    throw std::runtime_error(path + ": " + std::to_string(io->GetNumberOfComponents()) +
+                             " values per voxel (a colour, vector or 4-D image); a CT has one");
+  {
+    std::array<std::size_t, 3> size{};
+    double spacing[3], origin[3], direction[9];
+    for (unsigned i = 0; i < 3; ++i) {
+      size[i] = io->GetDimensions(i);
+      spacing[i] = io->GetSpacing(i);
+      origin[i] = io->GetOrigin(i);
+      for (unsigned j = 0; j < 3; ++j) direction[3 * j + i] = io->GetDirection(i)[j];
+    }
+    checkGeometry(path, size, spacing, origin, direction);
+  }
+  detail::checkPayload(path, format, io->GetImageSizeInBytes());
+  auto reader = itk::ImageFileReader<ImageType>::New();
+  reader->SetImageIO(io);
+  reader->SetFileName(path);
+  {
+    StderrCapture capture;
+    reader->Update();
+    messages = capture.release();
+  }
+  // MetaIO reports a short read only on stderr ("data not read completely"): anything it says is an error.
+  if (format == detail::VolumeFormat::MetaImage && !oneLine(messages).empty())
+    throw std::runtime_error(path + ": corrupt or truncated MetaImage (" + oneLine(messages) + ")");
+  return reader->GetOutput();
+}
 
 } // namespace
 
@@ -177,54 +242,11 @@ ImageType::Pointer readVolume(const std::string& path) {
   if (!fs::exists(path, ec)) throw std::runtime_error(path + ": no such file or directory");
   ImageType::Pointer image;
   try {
-    if (fs::is_directory(path, ec)) {
-      image = readDicomSeries(path);
-    } else {
-      itk::ImageIOBase::Pointer io = imageIOForExtension(path);
-      if (!io || !io->CanReadFile(path.c_str())) {
-        // Unknown extension or content that does not match it: try every format we know.
-        io = nullptr;
-        const std::vector<itk::ImageIOBase::Pointer> candidates{
-            itk::NrrdImageIO::New().GetPointer(), itk::MetaImageIO::New().GetPointer(),
-            itk::NiftiImageIO::New().GetPointer(), itk::GDCMImageIO::New().GetPointer()};
-        for (const auto& candidate : candidates) {
-          if (candidate->CanReadFile(path.c_str())) {
-            io = candidate;
-            break;
-          }
-        }
-      }
-      if (!io)
-        throw std::runtime_error(path + ": not a readable image (corrupt, or not DICOM, NRRD, "
-                                        "MetaImage or NIfTI)");
-      io->SetFileName(path);
-      io->ReadImageInformation();
-      if (io->GetNumberOfDimensions() != 3)
-        throw std::runtime_error(path + ": not a 3-D volume (" +
-                                 std::to_string(io->GetNumberOfDimensions()) + "-D image)");
-      checkNiftiComplete(path, io->GetImageSizeInBytes());
-      auto reader = itk::ImageFileReader<ImageType>::New();
-      reader->SetImageIO(io);
-      reader->SetFileName(path);
-      const bool isMeta = dynamic_cast<itk::MetaImageIO*>(io.GetPointer()) != nullptr;
-      std::string metaMessages;
-      {
-        std::unique_ptr<CerrCapture> capture;
-        if (isMeta) capture = std::make_unique<CerrCapture>();
-        reader->Update();
-        if (capture) metaMessages = capture->text();
-      }
-      if (!metaMessages.empty()) {
-        while (!metaMessages.empty() && std::isspace(static_cast<unsigned char>(metaMessages.back())))
-          metaMessages.pop_back();
-        for (auto& ch : metaMessages)
-          if (ch == '\n') ch = ' ';
-        throw std::runtime_error(path + ": corrupt or truncated MetaImage (" + metaMessages + ")");
-      }
-      image = reader->GetOutput();
-    }
+    image = fs::is_directory(path, ec) ? readDicomSeries(path) : readVolumeFile(path);
   } catch (const itk::ExceptionObject& e) {
-    throw std::runtime_error(path + ": cannot read (corrupt or truncated?): " + e.GetDescription());
+    throw std::runtime_error(path + ": cannot read (corrupt or truncated?): " + oneLine(e.GetDescription()));
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(path + ": not enough memory to read it");
   }
   checkVolume(path, image);
   image->DisconnectPipeline();

@@ -179,6 +179,10 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
 
   const bool writing = !o.outDir.empty();
   if (writing) fs::create_directories(o.outDir);
+  // An earlier run's temporaries and snapshots must not mix with this run's (AtomicFile.h).
+  if (writing)
+    imaging::removeStaleOutputs(o.outDir, {"particles_####.vtp", "simulated_ct_####.nrrd", "simulated_ct_start.nrrd",
+                                           "sequence.json"});
   const sph::ParticleVoxeliser voxeliser(solid.grid, 2.0 * scene.particleRadiusMm * 1e-3); // h = 2r
   // simulated_ct_snapshots: the simulated CT at t = 0 (no cement yet: the background of an X-ray sequence)
   // and at every particle snapshot, listed with their times in sequence.json.

@@ -205,7 +205,14 @@ SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string
   try {
     return sceneFromJson(j, overrides);
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(path + ": " + e.what());
+    // Blame the command line's override when it set the key at fault, else the file.
+    const std::string what = e.what();
+    for (const std::string& o : overrides) {
+      const std::string key = o.substr(0, o.find('='));
+      if (what.find("'" + key + "'") != std::string::npos)
+        throw std::invalid_argument("override " + o + " (command line): " + what);
+    }
+    throw std::invalid_argument(path + ": " + what);
   }
 }
 

@@ -1,0 +1,329 @@
+// The fuzz and corpus suite: cementsph run as a user runs it on inputs it never saw. Oracle for every case:
+// "exit 0 (a result), or exit 1 with exactly one line on stderr that names the input; never a signal
+// (exit >= 128), never a hang (timeout: exit 124)". Specific cases also check the line names the right
+// option or key, and that the output folder holds nothing partial. Damaged inputs come from fixed seeds.
+#include "ProgramRun.h"
+
+#include "cementsph/imaging/VolumeIO.h"
+
+#include <gtest/gtest.h>
+#include <itkImageRegionIteratorWithIndex.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using cementsph::testing::ProgramRun;
+
+const std::string kProgram = std::string(CEMENTSPH_BINARY_DIR) + "/bin/cementsph";
+const fs::path kData = CEMENTSPH_TEST_DATA_DIR;
+
+// Every run gets 60 s (a case takes well under a second; more is a hang), then SIGKILL 5 s later.
+ProgramRun runCementsph(const std::vector<std::string>& args) {
+  std::vector<std::string> all{"-k", "5", "60", kProgram};
+  all.insert(all.end(), args.begin(), args.end());
+  return cementsph::testing::runProgram("timeout", all);
+}
+
+std::size_t lines(const std::string& text) { return std::size_t(std::count(text.begin(), text.end(), '\n')); }
+
+// The suite's oracle for one case; `input` is what the line must name when the run refuses.
+void expectCleanOutcome(const ProgramRun& r, const std::string& input, const std::string& label) {
+  EXPECT_LT(r.exitCode, 124) << label << ": signal or timeout, exit " << r.exitCode << "\n" << r.err;
+  EXPECT_TRUE(r.exitCode == 0 || r.exitCode == 1) << label << ": exit " << r.exitCode << "\n" << r.err;
+  if (r.exitCode == 1) {
+    EXPECT_EQ(lines(r.err), 1u) << label << ": stderr must be one line:\n" << r.err;
+    EXPECT_NE(r.err.find(input), std::string::npos) << label << ": the line must name " << input << ":\n" << r.err;
+  }
+}
+
+std::string readBytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void writeBytes(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
+
+class InputFuzz : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("cementsph-fuzz-" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // A 12 x 10 x 8 CT with structure (so a DRR is not empty), at 0.5 x 0.6 x 0.7 mm.
+  cementsph::imaging::ImageType::Pointer smallCt() const {
+    auto image = cementsph::imaging::ImageType::New();
+    cementsph::imaging::ImageType::RegionType region;
+    region.SetSize({{12, 10, 8}});
+    image->SetRegions(region);
+    const double spacing[3] = {0.5, 0.6, 0.7};
+    image->SetSpacing(spacing);
+    image->Allocate();
+    for (itk::ImageRegionIteratorWithIndex<cementsph::imaging::ImageType> it(image, region); !it.IsAtEnd(); ++it) {
+      const auto i = it.GetIndex();
+      it.Set(float((i[0] * 7 + i[1] * 3 + i[2] * 11) % 13) * 100.0f - 500.0f);
+    }
+    return image;
+  }
+
+  ProgramRun drr(const fs::path& volume) {
+    return runCementsph({"drr", "--volume", volume.string(), "--out", (dir_ / "drr-out").string(), "--detector-pixels",
+                         "8,8", "--detector-size-mm", "20,20"});
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(InputFuzz, DicomCorpusFilesAndFoldersAreRefusedInOneLine) {
+  std::size_t cases = 0;
+  for (const auto& entry : fs::directory_iterator(kData / "dicom-corpus")) {
+    const std::string name = entry.path().filename().string();
+    if (name == "README.md" || name == "pydicom-copyright.txt") continue;
+    const ProgramRun file = drr(entry.path());
+    EXPECT_EQ(file.exitCode, 1) << name << "\n" << file.err;
+    expectCleanOutcome(file, entry.path().string(), name);
+    // The same file alone in a folder (the series reader's path).
+    const fs::path folder = dir_ / ("folder-" + name);
+    fs::create_directories(folder);
+    fs::copy_file(entry.path(), folder / name);
+    const ProgramRun series = drr(folder);
+    EXPECT_EQ(series.exitCode, 1) << name << " in a folder\n" << series.err;
+    expectCleanOutcome(series, folder.string(), name + " in a folder");
+    ++cases;
+  }
+  EXPECT_EQ(cases, 7u);
+}
+
+TEST_F(InputFuzz, DamagedCtSeriesAreRefusedAndTheIntactOneIsRead) {
+  const fs::path good = dir_ / "series";
+  cementsph::imaging::writeDicomSeries(smallCt(), good.string(), -1024.0);
+  std::vector<fs::path> slices;
+  for (const auto& e : fs::directory_iterator(good)) slices.push_back(e.path());
+  std::sort(slices.begin(), slices.end());
+  ASSERT_EQ(slices.size(), 8u);
+  const ProgramRun intact = drr(good);
+  ASSERT_EQ(intact.exitCode, 0) << intact.err;
+  EXPECT_TRUE(fs::exists(dir_ / "drr-out" / "drr.nrrd"));
+
+  auto copyOf = [&](const std::string& name) {
+    const fs::path d = dir_ / name;
+    fs::copy(good, d);
+    return d;
+  };
+  struct Expected {
+    fs::path folder;
+    std::string words; // what the line must say
+  };
+  std::vector<Expected> cases;
+  {
+    const fs::path d = copyOf("missing");
+    fs::remove(d / slices[4].filename());
+    cases.push_back({d, "uneven slice spacing"});
+  }
+  {
+    const fs::path d = copyOf("duplicated");
+    fs::copy_file(d / slices[3].filename(), d / "zz-copy.dcm");
+    cases.push_back({d, "same position"});
+  }
+  {
+    const fs::path d = copyOf("corpus-inside");
+    fs::copy_file(kData / "dicom-corpus" / "MR_small.dcm", d / "zz-mr.dcm");
+    fs::copy_file(kData / "dicom-corpus" / "DICOMDIR-nooffset", d / "DICOMDIR");
+    cases.push_back({d, "GDCM cannot parse"});
+  }
+  // Fuzzed copies: bytes flipped in one slice's header, a slice truncated, a slice replaced by garbage.
+  std::mt19937 random(12);
+  for (int k = 0; k < 12; ++k) {
+    const fs::path d = copyOf("fuzzed-" + std::to_string(k));
+    const fs::path victim = d / slices[std::size_t(k) % slices.size()].filename();
+    std::string bytes = readBytes(victim);
+    if (k % 4 == 3) {
+      bytes.resize(bytes.size() * std::size_t(k % 3 + 1) / 5);
+    } else if (k % 4 == 2) {
+      for (char& c : bytes) c = char(random());
+    } else {
+      const std::size_t headerEnd = std::min<std::size_t>(bytes.size(), 900);
+      for (int f = 0; f < 6; ++f) bytes[132 + random() % (headerEnd - 132)] ^= char(1 << (random() % 8));
+    }
+    writeBytes(victim, bytes);
+    cases.push_back({d, ""});
+  }
+  for (const Expected& c : cases) {
+    const ProgramRun r = drr(c.folder);
+    expectCleanOutcome(r, c.folder.string(), c.folder.filename().string());
+    if (!c.words.empty()) {
+      EXPECT_EQ(r.exitCode, 1) << c.folder.filename() << "\n" << r.err;
+      EXPECT_NE(r.err.find(c.words), std::string::npos) << c.folder.filename() << ": " << r.err;
+    }
+  }
+}
+
+TEST_F(InputFuzz, DamagedVolumesGiveAResultOrOneLine) {
+  const auto ct = smallCt();
+  std::vector<fs::path> originals;
+  for (const char* name : {"ct.nrrd", "ct.mha", "ct.nii.gz", "ct.nii"}) {
+    originals.push_back(dir_ / name);
+    cementsph::imaging::writeVolume(ct, originals.back().string());
+  }
+  for (const fs::path& p : originals) {
+    const ProgramRun r = drr(p);
+    ASSERT_EQ(r.exitCode, 0) << p << "\n" << r.err; // the intact files are read
+  }
+  std::mt19937 random(7);
+  int index = 0;
+  for (const fs::path& original : originals) {
+    const std::string bytes = readBytes(original);
+    const std::string ext = original.filename().string().substr(2); // ".nrrd", ".nii.gz", ...
+    for (int k = 0; k < 10; ++k) {
+      std::string damaged = bytes;
+      if (k < 3) {
+        damaged.resize(bytes.size() * std::size_t(k + 1) / 4); // truncated to 1/4, 1/2, 3/4
+      } else {
+        for (int f = 0; f < k; ++f) damaged[random() % damaged.size()] ^= char(1 << (random() % 8));
+      }
+      const fs::path p = dir_ / ("damaged-" + std::to_string(index++) + ext);
+      writeBytes(p, damaged);
+      const ProgramRun r = drr(p);
+      expectCleanOutcome(r, p.string(), p.filename().string());
+      if (k < 3) {
+        EXPECT_EQ(r.exitCode, 1) << p.filename() << " (truncated)\n" << r.err;
+      }
+    }
+  }
+}
+
+TEST_F(InputFuzz, HeaderCasesFromTheIssueAreRefused) {
+  const auto ct = smallCt();
+  const fs::path mha = dir_ / "ct.mha";
+  cementsph::imaging::writeVolume(ct, mha.string()); // compressed
+  std::string header = readBytes(mha);
+  struct Case {
+    std::string name, bytes, words;
+  };
+  std::vector<Case> cases;
+  {
+    std::string b = header;
+    b.replace(b.find("ElementDataFile"), 15, "ElementDataFiel");
+    cases.push_back({"misspelled.mha", b, "ElementDataFile"});
+  }
+  const std::string nrrd = "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nspacings: SP SP SP\nencoding: raw\n"
+                           "endian: little\n\n";
+  auto rawNrrd = [&](const std::string& spacing, float value, const std::string& dims = "") {
+    std::string h = nrrd;
+    for (std::size_t at; (at = h.find("SP")) != std::string::npos;) h.replace(at, 2, spacing);
+    if (!dims.empty()) h.replace(h.find("dimension: 3\nsizes: 2 2 2"), 25, dims);
+    const std::size_t voxels = dims.empty() ? 8 : 16;
+    std::string data(voxels * 4, '\0');
+    for (std::size_t k = 0; k < voxels; ++k) std::memcpy(&data[k * 4], &value, 4);
+    return h + data;
+  };
+  cases.push_back({"nan.nrrd", rawNrrd("1", std::numeric_limits<float>::quiet_NaN()), "NaN"});
+  cases.push_back({"inf.nrrd", rawNrrd("1", std::numeric_limits<float>::infinity()), "infinite"});
+  cases.push_back({"huge-spacing.nrrd", rawNrrd("1e300", 0.0f), "spacing"});
+  cases.push_back({"four-d.nrrd", rawNrrd("1", 0.0f, "dimension: 4\nsizes: 2 2 2 2"), "4"});
+  // A gzip NRRD with one byte of its compressed data changed: only the checksum can tell.
+  {
+    const fs::path gz = dir_ / "ct.nrrd";
+    cementsph::imaging::writeVolume(ct, gz.string());
+    std::string b = readBytes(gz);
+    b[b.size() - 20] ^= 0x10;
+    cases.push_back({"bad-checksum.nrrd", b, "compressed"});
+  }
+  for (const Case& c : cases) {
+    const fs::path p = dir_ / c.name;
+    writeBytes(p, c.bytes);
+    const ProgramRun r = drr(p);
+    EXPECT_EQ(r.exitCode, 1) << c.name << "\n" << r.err;
+    expectCleanOutcome(r, p.string(), c.name);
+    EXPECT_NE(r.err.find(c.words), std::string::npos) << c.name << ": " << r.err;
+  }
+}
+
+// Options and scenes: each refused in one line that names the option or key, before any output.
+TEST_F(InputFuzz, BadOptionsAndScenesNameTheOptionOrKey) {
+  const std::string ct = (kData / "foam-phantom" / "pre.nrrd").string();
+  const std::string scene = (kData / "scenes" / "paper-1ml.json").string();
+  const std::string tip = "22.325,21.855,21.75";
+  const std::string out = (dir_ / "out").string();
+  struct Case {
+    std::vector<std::string> args;
+    std::string names;
+  };
+  const std::vector<Case> cases{
+      {{"darcy", "--porosities", "1", "--out", out}, "--porosities"},
+      {{"darcy", "--steady-tolerance", "0", "--out", out}, "--steady-tolerance"},
+      {{"darcy", "--time-step-s", "1e-20", "--out", out}, "--time-step-s"},
+      {{"darcy", "--lattice", "100000", "--out", out}, "--lattice"},
+      {{"darcy", "--threads", "-3", "--out", out}, "--threads"},
+      {{"darcy", "--no-such-option", "--out", out}, "--no-such-option"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", "nan,nan,nan", "--out", out}, "--tip-mm"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "particle_radius_mm=1e-6", "--out", out},
+       "particle_radius_mm"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "max_displacement_over_h=1e-9", "--out", out},
+       "max_displacement_over_h"},
+  };
+  for (const Case& c : cases) {
+    const ProgramRun r = runCementsph(c.args);
+    std::string label;
+    for (const auto& a : c.args) label += a + " ";
+    EXPECT_EQ(r.exitCode, 1) << label << "\n" << r.err; // CLI mistakes too: not CLI11's 105-114
+    EXPECT_EQ(lines(r.err), 1u) << label << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.names), std::string::npos) << label << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "permeability.csv")) << label;
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "metrics.json")) << label;
+  }
+}
+
+// --threads beyond the cores is capped (it segfaulted at 100000): the result equals the 1-thread one.
+TEST_F(InputFuzz, HugeThreadCountIsCapped) {
+  const fs::path volume = dir_ / "ct.nrrd";
+  cementsph::imaging::writeVolume(smallCt(), volume.string());
+  for (const char* threads : {"1", "100000"}) {
+    const ProgramRun r = runCementsph({"drr", "--volume", volume.string(), "--out", (dir_ / threads).string(),
+                                       "--detector-pixels", "8,8", "--threads", threads});
+    ASSERT_EQ(r.exitCode, 0) << threads << " threads\n" << r.err;
+  }
+  // The same pixels give the same compressed file: byte equality, the 1-thread run as the reference.
+  const std::string one = readBytes(dir_ / "1" / "drr.nrrd"), many = readBytes(dir_ / "100000" / "drr.nrrd");
+  EXPECT_FALSE(one.empty());
+  EXPECT_EQ(one, many);
+}
+
+// Outputs: an earlier run's snapshots and temporaries are removed at the start; a write that fails (here: the
+// file size limit, ulimit -f 8 KiB, as a full disk fails it) is exit 2 with one line, and no file under a final
+// name is partial (every particles_NNNN.vtp left is a complete VTK XML file, ending in </VTKFile>).
+TEST_F(InputFuzz, FailedWriteLeavesNoPartialFileAndStaleOutputsGo) {
+  const fs::path out = dir_ / "inject";
+  fs::create_directories(out);
+  writeBytes(out / "particles_0099.vtp", "old");
+  writeBytes(out / "simulated_ct.tmp-123-4.nrrd", "old");
+  const std::string command = "ulimit -f 8; exec timeout -k 5 60 '" + kProgram + "' inject --ct '" +
+                              (kData / "foam-phantom" / "pre.nrrd").string() + "' --scene '" +
+                              (kData / "scenes" / "paper-1ml.json").string() +
+                              "' --tip-mm 22.325,21.855,21.75 --quiet --no-pictures --out '" + out.string() + "'";
+  const ProgramRun r = cementsph::testing::runProgram("bash", {"-c", command});
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("file size limit"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "particles_0099.vtp"));
+  EXPECT_FALSE(fs::exists(out / "simulated_ct.tmp-123-4.nrrd"));
+  EXPECT_FALSE(fs::exists(out / "metrics.json"));
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp-"), std::string::npos) << name;
+    const std::string text = readBytes(e.path());
+    EXPECT_NE(text.find("</VTKFile>"), std::string::npos) << name << " is partial";
+  }
+}
+
+} // namespace
