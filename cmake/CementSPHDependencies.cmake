@@ -5,9 +5,9 @@ find_package(OpenMP REQUIRED COMPONENTS CXX)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
 
-# VTK 9.1: list components explicitly (see shared platform notes). Rendering runs on an X display;
-# on a headless machine the Rendering module starts a virtual one (Xvfb) itself.
-find_package(VTK 9.1 REQUIRED COMPONENTS
+# VTK 9.1: list components explicitly (see shared platform notes). The lists are kept in variables for
+# the installed CementSPHConfig.cmake, which finds the same components again.
+set(CEMENTSPH_VTK_COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel CommonSystem CommonTransforms CommonMisc
   ChartsCore ViewsContext2D RenderingContext2D RenderingContextOpenGL2
   RenderingCore RenderingOpenGL2 RenderingFreeType RenderingAnnotation RenderingVolume
@@ -15,14 +15,16 @@ find_package(VTK 9.1 REQUIRED COMPONENTS
   FiltersCore FiltersGeneral FiltersGeometry FiltersModeling FiltersSources FiltersExtraction
   ImagingCore ImagingGeneral ImagingMath ImagingStatistics ImagingMorphological
   TestingRendering)
+find_package(VTK 9.1 REQUIRED COMPONENTS ${CEMENTSPH_VTK_COMPONENTS})
 
 # ITK 5.2 (Debian): no ITKVtkGlue, so the imaging module carries its own geometry-preserving bridge.
-find_package(ITK 5.2 REQUIRED COMPONENTS
+set(CEMENTSPH_ITK_COMPONENTS
   ITKCommon ITKIOImageBase ITKIONRRD ITKIOMeta ITKIONIFTI ITKIOGDCM ITKIOTransformBase
   ITKIOTransformInsightLegacy ITKIOTransformMatlab ITKIOTransformHDF5 ITKRegistrationMethodsv4 ITKOptimizersv4 ITKMetricsv4
   ITKTransform ITKImageGrid ITKImageFilterBase ITKThresholding ITKConnectedComponents
   ITKMathematicalMorphology ITKBinaryMathematicalMorphology ITKSmoothing ITKImageIntensity
   ITKImageStatistics ITKLabelMap ITKDistanceMap ITKTestKernel)
+find_package(ITK 5.2 REQUIRED COMPONENTS ${CEMENTSPH_ITK_COMPONENTS})
 
 if(CEMENTSPH_BUILD_TESTING)
   find_package(GTest REQUIRED)

@@ -16,8 +16,11 @@ PACKAGES=(
   plastimatch
   # tests, benchmarks, command line, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
-  # off-screen rendering on headless machines (virtual X server + Mesa software GL)
-  xvfb xauth libgl1-mesa-dri
+  # off-screen rendering with no X server: OSMesa first, Mesa's surfaceless EGL where it fails
+  # (Modules/Rendering/OffScreen/include/cementsph/rendering/RenderBackend.h)
+  libosmesa6-dev libegl-mesa0 libgl1-mesa-dri
+  # the last fallback if neither OSMesa nor EGL gives a context: a private virtual X server
+  xvfb xauth
 )
 
 SUDO=""

@@ -43,7 +43,7 @@ using nlohmann::json;
 struct CompareArgs {
   std::string pre, post, simulated, out;
   std::vector<double> injection;
-  double thresholdHU = SegmentationOptions{}.differenceThresholdHU;
+  double forcedThresholdHU = 0.0; // used only if --threshold-hu is given
   double closingMm = 0.0;
   double searchRadiusMm = SegmentationOptions{}.injectionSearchRadiusMm;
   double smoothingVoxels = sm::IsosurfaceOptions{}.smoothingSigmaVoxels;
@@ -62,6 +62,9 @@ json cementJson(const Cement& c) {
   j["cement_voxels"] = c.segmentation.voxels;
   j["mean_spreading_distance_mm"] = c.spreadingMm;
   j["centroid_mm"] = c.found() ? json(c.centroid) : json(nullptr);
+  j["threshold_rule"] = c.segmentation.thresholdRule;
+  j["cement_threshold_hu"] = c.segmentation.thresholdHU;
+  j["cement_contrast_hu"] = c.segmentation.thresholdRule == "fixed" ? json(nullptr) : json(c.segmentation.cementContrastHU);
   j["components_above_threshold"] = c.segmentation.componentsFound;
   j["component_selection"] = c.segmentation.selection;
   if (c.segmentation.selection == "nearest-to-injection-point")
@@ -92,9 +95,10 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
       ->delimiter(',')
       ->expected(3);
   sub.add_option("--out", a->out, "Output directory (created; existing files are replaced)")->required();
-  sub.add_option("--threshold-hu", a->thresholdHU,
-                 "Cement = (registered post - pre) above this, HU")
-      ->capture_default_str();
+  CLI::Option* forcedThreshold =
+      sub.add_option("--threshold-hu", a->forcedThresholdHU,
+                     "Cement = (registered post - pre) above this fixed value, HU (default: half the cement's "
+                     "own contrast, estimated from the data; metrics.json reports it as cement_threshold_hu)");
   sub.add_option("--closing-radius-mm", a->closingMm,
                  "Morphological closing of the cement mask, ball radius in mm (0: none)")
       ->capture_default_str();
@@ -112,7 +116,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
                "Do not write slices.png (axial slices every 5 mm, CT above simulated, paper Fig. 11) and "
                "surfaces.png (CT and simulated isosurfaces and the distance between them, Fig. 7)");
 
-  return [a]() {
+  return [a, forcedThreshold]() {
     const auto start = std::chrono::steady_clock::now();
     json timing;
     const sm::Point3 injection{a->injection[0], a->injection[1], a->injection[2]};
@@ -153,7 +157,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
     // 3. Segment, 4. measure.
     t = std::chrono::steady_clock::now();
     SegmentationOptions seg;
-    seg.differenceThresholdHU = a->thresholdHU;
+    if (forcedThreshold->count() > 0) seg.differenceThresholdHU = a->forcedThresholdHU;
     seg.injectionPointMm = injectionPoint;
     seg.injectionSearchRadiusMm = a->searchRadiusMm;
     seg.closingRadiusMm = a->closingMm;
@@ -168,7 +172,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
                          {"post", a->post},
                          {"simulated", a->simulated.empty() ? json(nullptr) : json(a->simulated)},
                          {"injection_point_mm", a->injection}};
-    metrics["segmentation"] = {{"difference_threshold_hu", a->thresholdHU},
+    metrics["segmentation"] = {{"threshold_rule", describeThresholdRule(seg)},
                                {"closing_radius_mm", a->closingMm},
                                {"injection_search_radius_mm", a->searchRadiusMm},
                                {"surface_smoothing_sigma_voxels", a->smoothingVoxels}};
@@ -184,11 +188,14 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
           {"levels", levels},
           {"cement_mask_threshold_hu", registration->cementThresholdHU},
           {"cement_masked_moving_voxels", registration->maskedMovingVoxels},
-          {"transform_file", "post_to_pre_affine.tfm"}};
+          {"transform_file", "pre_to_post.tfm"},
+          {"transform_maps", "points of the pre CT (mm) to the same points of the post CT; resampling the post CT "
+                             "through it puts it on the pre CT's grid (registered_post.nrrd)"}};
     } else {
       metrics["registration"] = nullptr;
     }
     metrics["cement_volume_ml"] = ct.segmentation.volumeMl;
+    metrics["cement_threshold_hu"] = ct.segmentation.thresholdHU;
     metrics["mean_spreading_distance_mm"] = ct.spreadingMm;
     metrics["ct"] = cementJson(ct);
     if (!ct.found()) warnings.push_back("no cement found in the post-injection CT");
@@ -230,7 +237,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
     if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
     const fs::path out(a->out);
     writeVolume(registered, (out / "registered_post.nrrd").string());
-    if (registration) writeTransform(registration->transform, (out / "post_to_pre_affine.tfm").string());
+    if (registration) writeTransform(registration->transform, (out / "pre_to_post.tfm").string());
     writeMask(ct.segmentation.mask, (out / "cement_ct_mask.nrrd").string());
     if (ct.surface) writePolyData(ct.surface, (out / "cement_ct_surface.vtp").string());
     if (sim) {

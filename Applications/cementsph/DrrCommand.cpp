@@ -52,7 +52,7 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
         cementsph::app::geometryForVolume(a->drr, geometryOf(ct).physicalBounds(), false);
 
     auto t = std::chrono::steady_clock::now();
-    vtkSmartPointer<vtkImageData> hu = toVtk(ct.GetPointer());
+    vtkSmartPointer<vtkImageData> hu = cementsph::app::viewAsVtk(ct.GetPointer());
     const double bridgeSeconds = seconds(t);
     t = std::chrono::steady_clock::now();
     const vtkSmartPointer<vtkImageData> image = cementsph::drr::projectVolume(hu, geometry, a->drr.threads);
@@ -86,7 +86,7 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
       << (geometry.parallel ? "parallel beam" : "cone beam") << ", gantry " << geometry.gantryAngleDeg
       << " deg, isocentre " << geometry.isocenterMm[0] << "," << geometry.isocenterMm[1] << ","
       << geometry.isocenterMm[2] << " mm): max " << range[1] << " (line integral of mu in 1/mm, / 10)\n"
-      << "wrote " << nrrd << " and " << png << " (read " << readSeconds << " s, ITK->VTK " << bridgeSeconds
+      << "wrote " << nrrd << " and " << png << " (read " << readSeconds << " s, ITK->VTK view " << bridgeSeconds
       << " s, DRR " << drrSeconds << " s, write " << writeSeconds << " s, total " << total << " s)\n";
     std::cout << s.str();
     return 0;

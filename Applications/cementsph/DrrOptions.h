@@ -3,6 +3,9 @@
 #pragma once
 
 #include "cementsph/drr/DRRGeometry.h"
+#include "cementsph/imaging/ImageTypes.h"
+
+#include <vtkSmartPointer.h>
 
 #include <CLI/CLI.hpp>
 
@@ -36,6 +39,11 @@ drr::DRRGeometry checkedGeometry(const DrrGeometryArgs& args);
 // fitted to the box's projection (DRRGeometry::fitDetectorTo, 10 % margin, square pixels). Throws
 // std::runtime_error when the result is unusable.
 drr::DRRGeometry geometryForVolume(const DrrGeometryArgs& args, const std::array<double, 6>& boundsMm, bool fitDetector);
+
+// The CT's voxels seen as a vtkImageData without copying them (geometry as imaging::toVtk gives it):
+// the DRR only reads them, and a 256x256x200 copy was a tenth of a whole `cementsph drr` run (the copy and
+// its page faults). `volume` must outlive the view.
+vtkSmartPointer<vtkImageData> viewAsVtk(const imaging::ImageType* volume);
 
 // A DRR as an 8-bit picture, written atomically: line integrals mapped linearly from [0, windowMax] to
 // [0, 255] (dense = bright, as a radiograph film); windowMax <= 0: the image's own maximum.

@@ -154,8 +154,8 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
       const study::AlignedPost aligned = study::alignPostOntoPre(ct, post, !a->noRegistration);
       study::AnalysedCement cement = runner.analyse(aligned.volume);
       if (!cement.found())
-        throw std::runtime_error(a->referenceCt + ": no cement found (reference minus CT above " +
-                                 fmt(options.segmentation.differenceThresholdHU, "%g") + " HU at the tip)");
+        throw std::runtime_error(a->referenceCt + ": no cement found (reference minus CT " +
+                                 imaging::describeThresholdRule(options.segmentation) + ", at the tip)");
       reference = "the post-operative CT `" + a->referenceCt + "`, " +
                   (a->noRegistration ? std::string("resampled onto the CT without registration")
                                      : std::string("registered onto the CT as `compare` does (affine, cement masked)")) +
@@ -189,8 +189,8 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
               fmt(s.flowRateMlPerS, "%g") + " ml/s, " + fmt(s.viscosityPaS, "%g") + " Pa.s, model preset " +
               s.modelPreset + ", tip (" + fmt((*s.tipMm)[0], "%g") + ", " + fmt((*s.tipMm)[1], "%g") + ", " +
               fmt((*s.tipMm)[2], "%g") + ") mm; " + std::to_string(threads) + " OpenMP thread(s).",
-          "Cement in every volume: minus the CT, above " + fmt(options.segmentation.differenceThresholdHU, "%g") +
-              " HU, the component at the tip, as `cementsph compare` segments it."};
+          "Cement in every volume: minus the CT, " + imaging::describeThresholdRule(options.segmentation) +
+              ", the component at the tip, as `cementsph compare` segments it."};
       if (!sizeRows.empty())
         preamble.push_back(
             "Reference: " + reference +

@@ -14,6 +14,7 @@
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <unistd.h>
@@ -145,4 +146,20 @@ TEST_F(DrrCommand, BadInputIsOneLineNonZeroAndNoOutput) {
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.message;
   }
+}
+
+// `cementsph` is a launcher that runs libexec/cementsph/cementsph-drr (or -all) in its place. Without
+// them beside it, it says which program it could not run, in one line, and exits 2 (a failed run).
+TEST(CementsphLauncher, MissingProgramsAreOneClearLine) {
+  const fs::path alone = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / ("launcher-alone-" + std::to_string(::getpid()));
+  fs::remove_all(alone);
+  fs::create_directories(alone / "bin");
+  fs::copy_file(CEMENTSPH_EXE, alone / "bin" / "cementsph");
+  const ProgramRun r = cementsph::testing::runProgram((alone / "bin" / "cementsph").string(), std::vector<std::string>{"drr", "--help"});
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.err.find("cannot run " + (alone / "bin" / "../libexec/cementsph/cementsph-drr").string()),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  fs::remove_all(alone);
 }

@@ -67,3 +67,30 @@ TEST(ComparePictures, FailedPictureKeepsMetricsAndExitsThree) {
   EXPECT_NE(r.err.find("picture slices.png not written"), std::string::npos) << r.err;
   EXPECT_TRUE(fs::exists(out / "surfaces.png")); // one failed picture does not stop the other
 }
+
+// No OpenGL to be had (here: a backend that does not exist is forced) fails the GL picture, surfaces.png,
+// in one line and exit 3; the numbers and the picture composed without GL (slices.png) are written.
+TEST(ComparePictures, NoOpenGLIsAFailedPictureExitThree) {
+  forgetDisplay();
+  const fs::path out = scratchFolder() / "out";
+  setenv("CEMENTSPH_RENDER_BACKEND", "none-such", 1);
+  const auto r = runProgram(CEMENTSPH_EXECUTABLE, compareArgs(out));
+  unsetenv("CEMENTSPH_RENDER_BACKEND");
+  EXPECT_EQ(r.exitCode, 3) << r.err;
+  EXPECT_TRUE(fs::exists(out / "metrics.json"));
+  EXPECT_TRUE(fs::exists(out / "slices.png"));
+  EXPECT_FALSE(fs::exists(out / "surfaces.png"));
+  EXPECT_NE(r.err.find("picture surfaces.png not written"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("CEMENTSPH_RENDER_BACKEND is 'none-such'"), std::string::npos) << r.err;
+}
+
+// With CEMENTSPH_VERBOSE the program names the backend that drew its pictures; headless, that is OSMesa.
+TEST(ComparePictures, VerboseNamesTheBackend) {
+  forgetDisplay();
+  const fs::path out = scratchFolder() / "out";
+  setenv("CEMENTSPH_VERBOSE", "1", 1);
+  const auto r = runProgram(CEMENTSPH_EXECUTABLE, compareArgs(out));
+  unsetenv("CEMENTSPH_VERBOSE");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("pictures are drawn with osmesa"), std::string::npos) << r.err;
+}

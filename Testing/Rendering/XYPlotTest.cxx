@@ -3,11 +3,17 @@
 #include "RenderingTestSupport.h"
 
 #include "cementsph/rendering/ImageCompare.h"
+#include "cementsph/rendering/OffScreenWindow.h"
+#include "cementsph/rendering/RenderBackend.h"
+#include "cementsph/rendering/VirtualDisplay.h"
 #include "cementsph/rendering/XYPlot.h"
+
+#include <vtkRenderer.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 
@@ -183,4 +189,125 @@ TEST(XYPlot, MissingFolderThrowsWithoutCreatingIt) {
   const auto dir = scratchFolder() / "does-not-exist";
   EXPECT_THROW(writePlotPng(basicSpec(), dir / "plot.png"), std::runtime_error);
   EXPECT_FALSE(std::filesystem::exists(dir));
+}
+
+// ---- Backends (issue 12, item 5): pictures with no X server at all, and failures that are never silent.
+
+namespace {
+
+// Renders basicSpec() into `png` in a fresh process (a backend is settled once per process) with no
+// DISPLAY and a PATH that holds no Xvfb, forcing `backend` ("" lets the program choose). The child exits
+// 0 if it rendered with `expectBackend` and started no X server; the parent then compares the picture.
+void renderInFreshProcess(const std::string& backend, const std::string& expectBackend,
+                          const std::filesystem::path& png) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const std::filesystem::path emptyBin = png.parent_path() / "empty-bin";
+  std::filesystem::create_directories(emptyBin);
+  EXPECT_EXIT(
+      {
+        unsetenv("DISPLAY");
+        setenv("PATH", emptyBin.c_str(), 1);
+        if (backend.empty()) unsetenv("CEMENTSPH_RENDER_BACKEND");
+        else setenv("CEMENTSPH_RENDER_BACKEND", backend.c_str(), 1);
+        try {
+          writePlotPng(basicSpec(), png);
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "%s\n", e.what());
+          std::exit(2);
+        }
+        const auto used = lastRenderBackend();
+        const bool rightBackend = used && renderBackendName(*used) == expectBackend;
+        std::exit(rightBackend && !VirtualDisplay::startedVirtualServer() ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), "");
+}
+
+} // namespace
+
+// The default path on a headless machine: OSMesa, no X server, and the same picture as the baseline
+// (which was drawn through Xvfb + GLX, an independent GL path).
+TEST(RenderBackend, NoDisplayNoXvfbRendersBaselineWithOSMesa) {
+  const auto png = scratchFolder() / "osmesa.png";
+  renderInFreshProcess("", "osmesa", png);
+  ASSERT_TRUE(std::filesystem::exists(png));
+  expectMatchesBaseline(png, "xyplot_basic.png", kBaselineTolerance);
+}
+
+TEST(RenderBackend, SurfacelessEglRendersBaseline) {
+  const auto png = scratchFolder() / "egl.png";
+  renderInFreshProcess("egl", "egl", png);
+  ASSERT_TRUE(std::filesystem::exists(png));
+  expectMatchesBaseline(png, "xyplot_basic.png", kBaselineTolerance);
+}
+
+// The fallback: an X display (a private Xvfb here, since DISPLAY is unset) still renders the baseline.
+TEST(RenderBackend, XFallbackRendersBaseline) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const auto png = scratchFolder() / "x.png";
+  EXPECT_EXIT(
+      {
+        unsetenv("DISPLAY");
+        setenv("CEMENTSPH_RENDER_BACKEND", "x", 1);
+        writePlotPng(basicSpec(), png);
+        const auto used = lastRenderBackend();
+        std::exit(used == RenderBackend::XDisplay ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), "");
+  ASSERT_TRUE(std::filesystem::exists(png));
+  expectMatchesBaseline(png, "xyplot_basic.png", kBaselineTolerance);
+}
+
+// A render that comes back black (here: a black background and nothing drawn, the look of a context
+// that drew nothing) is a RenderFailure, and no picture is left behind.
+TEST(RenderBackend, BlackRenderIsAnErrorAndWritesNothing) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  auto window = makeOffScreenRenderWindow(64, 48);
+  auto renderer = vtkSmartPointer<vtkRenderer>::New();
+  renderer->SetBackground(0.0, 0.0, 0.0);
+  window->AddRenderer(renderer);
+  try {
+    writeWindowPng(window, dir / "black.png");
+    ADD_FAILURE() << "a black render was written without an error";
+  } catch (const RenderFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("all black"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(folderIsEmpty(dir));
+  EXPECT_EQ(RenderFailure::exitCode, 3);
+}
+
+// The same window with a grey background is a picture: the check does not reject everything.
+TEST(RenderBackend, GreyRenderIsWrittenWithItsColour) {
+  forgetDisplay();
+  const auto png = scratchFolder() / "grey.png";
+  auto window = makeOffScreenRenderWindow(64, 48);
+  auto renderer = vtkSmartPointer<vtkRenderer>::New();
+  renderer->SetBackground(0.5, 0.5, 0.5);
+  window->AddRenderer(renderer);
+  writeWindowPng(window, png);
+  const auto s = summarisePng(png);
+  EXPECT_EQ(s.width, 64);
+  EXPECT_EQ(s.height, 48);
+  EXPECT_EQ(s.distinctColours, 1u);
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(png.string().c_str());
+  reader->Update();
+  // 0.5 of 255 is 127.5; GL rounds to 127 or 128.
+  EXPECT_NEAR(reader->GetOutput()->GetScalarComponentAsDouble(10, 10, 0, 0), 127.5, 0.6);
+}
+
+TEST(RenderBackend, UnknownForcedBackendIsOneClearLine) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        setenv("CEMENTSPH_RENDER_BACKEND", "vulkan", 1);
+        try {
+          makeOffScreenRenderWindow(8, 8);
+        } catch (const RenderFailure& e) {
+          std::fprintf(stderr, "%s\n", e.what());
+          std::exit(RenderFailure::exitCode);
+        }
+        std::exit(0);
+      },
+      ::testing::ExitedWithCode(3), "CEMENTSPH_RENDER_BACKEND is 'vulkan'; use osmesa, egl or x");
 }

@@ -6,7 +6,8 @@
 //   2. the `cementsph drr` program (read .mha, DRR, write .nrrd + .png), 1 and 2 threads;
 //   3. `plastimatch drr -i exact` on the same .mha with the same geometry, OMP_NUM_THREADS 1 and 2
 //      (when plastimatch is on PATH), whose image is compared with ours pixel by pixel.
-// Times are the best of N runs (default 3). Usage: drr-bench [work-dir] [--repeats=N]. Prints Markdown.
+// DRR-only times are the best of N runs (default 3), whole programs the median of the N.
+// Usage: drr-bench [work-dir] [--repeats=N]. Prints Markdown.
 #include "SyntheticVolumes.h"
 #include "cementsph/drr/vtkDRRFilter.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
@@ -26,6 +27,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
 
 namespace fs = std::filesystem;
 using namespace cementsph;
@@ -120,13 +123,25 @@ bool readPfm(const fs::path& path, Image2D& d) {
 
 // Best wall time of repeats runs; reported (optional) gets the smallest "Total time: X secs" the
 // program printed (plastimatch's own figure for its DRR, without process start-up).
-double timeCommand(const std::string& cmd, int repeats, const fs::path& log, double* reported = nullptr) {
+// cpu (optional) gets the CPU time (user + system, all threads) of the last run: on a shared machine
+// it does not grow with the load the way wall time does.
+double childCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_CHILDREN, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+double timeCommand(const std::string& cmd, int repeats, const fs::path& log, double* reported = nullptr,
+                   double* cpu = nullptr) {
   double best = 1e30;
   if (reported) *reported = 1e30;
   for (int r = 0; r < repeats; ++r) {
     const double t = now();
+    const double cpu0 = childCpuSeconds();
     const int status = std::system((cmd + " > " + log.string() + " 2>&1").c_str());
     const double dt = now() - t;
+    if (cpu) *cpu = childCpuSeconds() - cpu0;
     if (status != 0) {
       std::cerr << "drr-bench: failed (see " << log << "): " << cmd << "\n";
       return -1.0;
@@ -138,6 +153,14 @@ double timeCommand(const std::string& cmd, int repeats, const fs::path& log, dou
       if (line.rfind("Total time:", 0) == 0) *reported = std::min(*reported, std::atof(line.c_str() + 11));
   }
   return best;
+}
+
+// The median of a set of run times (the whole-program figures: a shared machine's outliers do not count).
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 std::string fmt(double v, const char* f = "%.3f") {
@@ -167,7 +190,7 @@ int main(int argc, char** argv) {
 
   std::cout << "## DRR: 512x512 detector, 256x256x200 volume\n\n";
   std::cout << "Phantom: 256x256x200 voxels of 0.9x0.9x1.0 mm (soft-tissue body, bone block, cement ball); "
-               "detector 512x512 px, 400x400 mm; sad 1000 mm, sid 1500 mm; best of "
+               "detector 512x512 px, 400x400 mm; sad 1000 mm, sid 1500 mm; DRR alone: best of, whole programs: median of "
             << repeats << " runs.\n\n";
 
   const bool havePlastimatch = std::system("command -v plastimatch > /dev/null 2>&1") == 0;
@@ -182,12 +205,12 @@ int main(int argc, char** argv) {
     Setup s;
     s.gantryDeg = gantry;
     std::cout << "### Gantry " << gantry << " deg\n\n";
-    std::cout << "| implementation | threads | DRR time (s) | whole program (s) |\n|---|---|---|---|\n";
+    std::cout << "| implementation | threads | DRR time, best (s) | whole program, median (s) |\n|---|---|---|---|\n";
     // The four contenders run in turn within each repeat (not one after the other for all repeats),
-    // so that load from other users of a shared machine hits them alike; the best of the repeats counts.
+    // so that load from other users of a shared machine hits them alike.
     Image2D ours;
-    double drrBest[3] = {0, 1e30, 1e30}, whole[3] = {0, 1e30, 1e30};
-    double plm[3] = {0, 1e30, 1e30}, plmReported[3] = {0, 1e30, 1e30};
+    double drrBest[3] = {0, 1e30, 1e30}, plmReported[3] = {0, 1e30, 1e30};
+    std::vector<double> wholeRuns[3], plmRuns[3], wholeCpu[3], plmCpu[3];
     auto oursCommand = [&](int threads) {
       std::ostringstream cmd;
       cmd << CEMENTSPH_EXE << " drr --volume " << volumePath << " --out " << (work / "ours") << " --threads "
@@ -211,15 +234,20 @@ int main(int argc, char** argv) {
         double dt;
         ours = runFilter(hu, s, threads, dt);
         drrBest[threads] = std::min(drrBest[threads], dt);
-        whole[threads] = std::min(whole[threads], timeCommand(oursCommand(threads), 1, work / "ours.log"));
+        double cpu = 0.0;
+        wholeRuns[threads].push_back(timeCommand(oursCommand(threads), 1, work / "ours.log", nullptr, &cpu));
+        wholeCpu[threads].push_back(cpu);
         if (havePlastimatch) {
           double reported;
-          plm[threads] = std::min(plm[threads],
-                                  timeCommand(plastimatchCommand(threads), 1, work / "plastimatch.log", &reported));
+          plmRuns[threads].push_back(
+              timeCommand(plastimatchCommand(threads), 1, work / "plastimatch.log", &reported, &cpu));
+          plmCpu[threads].push_back(cpu);
           plmReported[threads] = std::min(plmReported[threads], reported);
         }
       }
     }
+    const double whole[3] = {0, median(wholeRuns[1]), median(wholeRuns[2])};
+    const double plm[3] = {0, median(plmRuns[1]), median(plmRuns[2])};
     for (int threads : {1, 2})
       std::cout << "| vtkDRRFilter / cementsph drr | " << threads << " | " << fmt(drrBest[threads]) << " | "
                 << fmt(whole[threads]) << " |\n";
@@ -260,7 +288,12 @@ int main(int argc, char** argv) {
               << fmt(plmReported[1] / best1, "%.1f") << "x, 2 threads " << fmt(plmReported[2] / best2, "%.1f")
               << "x.\n";
     std::cout << "Speed-up, whole program (read .mha, DRR, write; process start-up included): 1 thread "
-              << fmt(plm[1] / whole[1], "%.1f") << "x, 2 threads " << fmt(plm[2] / whole[2], "%.1f") << "x.\n\n";
+              << fmt(plm[1] / whole[1], "%.2f") << "x, 2 threads " << fmt(plm[2] / whole[2], "%.2f") << "x (medians of wall "
+                 "time); CPU time (user + system, median): ours "
+              << fmt(median(wholeCpu[1])) << " / " << fmt(median(wholeCpu[2])) << " s, plastimatch "
+              << fmt(median(plmCpu[1])) << " / " << fmt(median(plmCpu[2])) << " s at 1 / 2 threads: "
+              << fmt(median(plmCpu[1]) / median(wholeCpu[1]), "%.2f") << "x / "
+              << fmt(median(plmCpu[2]) / median(wholeCpu[2]), "%.2f") << "x.\n\n";
   }
   // Fixed cost of every cementsph run: loading ~150 VTK/ITK shared libraries.
   const double startup = timeCommand(std::string(CEMENTSPH_EXE) + " --version", repeats, work / "version.log");

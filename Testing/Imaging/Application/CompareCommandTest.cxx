@@ -5,7 +5,9 @@
 #include "cementsph/imaging/VolumeIO.h"
 
 #include <gtest/gtest.h>
+#include <itkContinuousIndex.h>
 #include <itkImageFileWriter.h>
+#include <itkImageRegionIteratorWithIndex.h>
 #include <itkNrrdImageIO.h>
 #include <nlohmann/json.hpp>
 
@@ -109,7 +111,7 @@ TEST_F(CompareCommand, WritesMetricsSurfacesAndVolumes) {
   const ProgramRun r = run(common((dir_ / "post.nrrd").string(), "ok") + " --simulated " + (dir_ / "sim.nrrd").string(), dir_);
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const fs::path out = dir_ / "ok";
-  for (const char* f : {"metrics.json", "registered_post.nrrd", "post_to_pre_affine.tfm", "cement_ct_mask.nrrd",
+  for (const char* f : {"metrics.json", "registered_post.nrrd", "pre_to_post.tfm", "cement_ct_mask.nrrd",
                         "cement_simulated_mask.nrrd", "cement_ct_surface.vtp", "cement_simulated_surface.vtp"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
   EXPECT_FALSE(hasTemporaries(out));
@@ -119,11 +121,13 @@ TEST_F(CompareCommand, WritesMetricsSurfacesAndVolumes) {
     ASSERT_TRUE(m.contains(key) && m[key].is_number()) << key;
   for (const char* key : {"ct_to_simulated_distance", "simulated_to_ct_distance"})
     for (const char* sub : {"mean_mm", "max_mm", "std_mm"}) ASSERT_TRUE(m[key][sub].is_number()) << key << sub;
-  // The synthetic ball (r = 6 mm, 3000 HU) has a logistic edge of scale 0.35 mm: the default 500 HU
-  // threshold (w = 1/6) puts the mask's edge at r + 0.35 ln 5 = 6.56 mm, i.e. 1.18 ml.
-  const double edge = 6.0 + 0.35 * std::log(5.0);
-  const double ballMl = 4.0 / 3.0 * M_PI * edge * edge * edge / 1000.0;
-  EXPECT_NEAR(m["cement_volume_ml"].get<double>(), ballMl, 0.08 * ballMl);
+  // The synthetic ball (r = 6 mm, 3000 HU over tissue near 0 HU) has a logistic edge of scale 0.35 mm:
+  // half the cement's contrast (w = 1/2) puts the mask's edge at r itself, 0.905 ml. (The old fixed
+  // 500 HU, w = 1/6, put it at r + 0.35 ln 5 = 6.56 mm, 1.18 ml: +31 %.)
+  const double ballMl = 4.0 / 3.0 * M_PI * 6.0 * 6.0 * 6.0 / 1000.0;
+  EXPECT_NEAR(m["cement_volume_ml"].get<double>(), ballMl, 0.03 * ballMl);
+  EXPECT_NEAR(m["cement_threshold_hu"].get<double>(), 1500.0, 150.0);
+  EXPECT_EQ(m["ct"]["threshold_rule"], "half-contrast");
   // A ball centred 1 mm from the injection point: mean spreading distance ~ 3R/4 = 4.5 mm.
   EXPECT_NEAR(m["mean_spreading_distance_mm"].get<double>(), 4.6, 1.0);
   EXPECT_GT(m["dice"].get<double>(), 0.6);
@@ -239,4 +243,69 @@ TEST(CompareCommandExample, RegisterCreatesItsOutputFolder) {
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "t.tfm"));
   EXPECT_TRUE(fs::exists(out / "r.nrrd"));
+}
+
+// ---- The bundled example (issue 12, item 4): Data/compare-example, whose truth.json holds the cement
+// ball (radius 5.5 mm at the injection point, in the post scan's space) and the misalignment. The perfect
+// simulation is the truth itself on the pre grid: sim(x) = post(A x), the ball blended into the pre scan
+// exactly as the example's generator blends it (logistic edge, 0.35 mm, 3000 HU). compare must find the
+// ball's volume within 2 % and, for the perfect simulation, an error below 0.05 mm.
+TEST(CompareExample, VolumeWithin2PercentAndPerfectSimulationErrorBelow005Mm) {
+  const fs::path example = fs::path(CEMENTSPH_TEST_DATA_DIR) / "compare-example";
+  const auto truth = nlohmann::json::parse(slurp(example / "truth.json"));
+  const auto pre = cementsph::imaging::readVolume((example / "pre.nrrd").string());
+  const fs::path scratch = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / ("compare-example-" + std::to_string(::getpid()));
+  fs::remove_all(scratch);
+  fs::create_directories(scratch);
+
+  Vec3 rotation{}, scale{}, translation{}, tip{};
+  for (int i = 0; i < 3; ++i) {
+    rotation[i] = truth["misalignment_rotation_deg"][i];
+    scale[i] = truth["misalignment_scale"][i];
+    translation[i] = truth["misalignment_translation_mm"][i];
+    tip[i] = truth["injection_point_mm"][i];
+  }
+  const double radius = truth["cement_radius_mm"];
+  const auto size = pre->GetLargestPossibleRegion().GetSize();
+  itk::ContinuousIndex<double, 3> middle;
+  for (unsigned i = 0; i < 3; ++i) middle[i] = (static_cast<double>(size[i]) - 1.0) / 2.0;
+  cementsph::imaging::PointType centrePoint;
+  pre->TransformContinuousIndexToPhysicalPoint(middle, centrePoint);
+  const Affine move = Affine::fromParameters(rotation, scale, translation, {centrePoint[0], centrePoint[1], centrePoint[2]});
+  const Vec3 ballCentre = move.apply(tip);
+
+  auto perfect = cementsph::imaging::ImageType::New();
+  perfect->CopyInformation(pre);
+  perfect->SetRegions(pre->GetLargestPossibleRegion());
+  perfect->Allocate();
+  itk::ImageRegionIteratorWithIndex<cementsph::imaging::ImageType> it(perfect, perfect->GetLargestPossibleRegion());
+  for (; !it.IsAtEnd(); ++it) {
+    cementsph::imaging::PointType x;
+    perfect->TransformIndexToPhysicalPoint(it.GetIndex(), x);
+    const Vec3 y = move.apply({x[0], x[1], x[2]});
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) d2 += (y[a] - ballCentre[a]) * (y[a] - ballCentre[a]);
+    const double w = 1.0 / (1.0 + std::exp((std::sqrt(d2) - radius) / 0.35));
+    it.Set(static_cast<float>((1.0 - w) * pre->GetPixel(it.GetIndex()) + w * 3000.0));
+  }
+  writeVolume(perfect, (scratch / "perfect.nrrd").string());
+
+  char point[96];
+  std::snprintf(point, sizeof point, "%.4f,%.4f,%.4f", tip[0], tip[1], tip[2]);
+  const ProgramRun r = run("compare --pre " + (example / "pre.nrrd").string() + " --post " +
+                               (example / "post_dicom").string() + " --simulated " + (scratch / "perfect.nrrd").string() +
+                               " --injection-point-mm " + point + " --no-pictures --out " + (scratch / "out").string(),
+                           scratch);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto m = nlohmann::json::parse(slurp(scratch / "out" / "metrics.json"));
+  // The ball is drawn in the post scan's space; on the pre grid its volume is divided by det(M), the
+  // product of the scales (a rotation keeps volumes).
+  const double truthMl = 4.0 / 3.0 * M_PI * radius * radius * radius / 1000.0 / (scale[0] * scale[1] * scale[2]);
+  std::cout << "compare-example: CT cement " << m["cement_volume_ml"] << " ml (truth " << truthMl
+            << "), threshold " << m["cement_threshold_hu"] << " HU, perfect simulation "
+            << m["simulated"]["cement_volume_ml"] << " ml, error " << m["error_mm"] << " mm\n";
+  EXPECT_NEAR(m["cement_volume_ml"].get<double>(), truthMl, 0.02 * truthMl);
+  EXPECT_NEAR(m["simulated"]["cement_volume_ml"].get<double>(), truthMl, 0.02 * truthMl);
+  EXPECT_LT(m["error_mm"].get<double>(), 0.05);
+  fs::remove_all(scratch);
 }

@@ -7,8 +7,11 @@
 #include <itkConnectedComponentImageFilter.h>
 #include <itkImageRegionConstIteratorWithIndex.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -51,26 +54,35 @@ ImageType::Pointer differenceImage(const ImageType* post, const ImageType* pre) 
   return out;
 }
 
-SegmentationResult segmentCement(const ImageType* post, const ImageType* pre,
-                                 const SegmentationOptions& options) {
-  const ImageType::Pointer diff = differenceImage(post, pre);
-  auto candidate = allocateLike<MaskType>(pre);
-  const std::size_t n = pre->GetLargestPossibleRegion().GetNumberOfPixels();
+namespace {
+
+using LabelImage = itk::Image<std::uint32_t, 3>;
+
+struct SelectedComponent {
+  MaskType::Pointer mask; // 0/1: the kept component only
+  std::size_t componentsFound = 0;
+  std::string selection; // as SegmentationResult::selection
+  double distanceToInjectionPointMm = 0.0;
+};
+
+// (difference > threshold), its connected components, and the one the options select.
+SelectedComponent selectComponent(const ImageType* diff, double thresholdHU, const SegmentationOptions& options) {
+  auto candidate = allocateLike<MaskType>(diff);
+  const std::size_t n = diff->GetLargestPossibleRegion().GetNumberOfPixels();
   {
     const float* d = diff->GetBufferPointer();
     auto* m = candidate->GetBufferPointer();
-    const auto threshold = static_cast<float>(options.differenceThresholdHU);
+    const auto threshold = static_cast<float>(thresholdHU);
     for (std::size_t i = 0; i < n; ++i) m[i] = d[i] > threshold ? 1 : 0;
   }
 
-  using LabelImage = itk::Image<std::uint32_t, 3>;
   auto components = itk::ConnectedComponentImageFilter<MaskType, LabelImage>::New();
   components->SetInput(candidate);
   components->SetFullyConnected(false); // face neighbours: thin bridges through noise do not join
   components->Update();
   const LabelImage* labels = components->GetOutput();
 
-  SegmentationResult result;
+  SelectedComponent result;
   result.componentsFound = components->GetObjectCount();
   std::vector<std::size_t> sizes(result.componentsFound + 1, 0);
   const auto* l = labels->GetBufferPointer();
@@ -114,9 +126,71 @@ SegmentationResult segmentCement(const ImageType* post, const ImageType* pre,
 
   auto* m = candidate->GetBufferPointer();
   for (std::size_t i = 0; i < n; ++i) m[i] = (keep != 0 && l[i] == keep) ? 1 : 0;
+  result.mask = candidate;
+  return result;
+}
 
-  MaskType::Pointer mask = candidate;
-  if (keep != 0 && options.closingRadiusMm > 0.0) {
+// The p-th percentile (nearest rank) of the difference over the mask's voxels; 0 for an empty mask.
+double percentileInMask(const ImageType* diff, const MaskType* mask, double percentile) {
+  std::vector<float> values;
+  const std::size_t n = diff->GetLargestPossibleRegion().GetNumberOfPixels();
+  const float* d = diff->GetBufferPointer();
+  const auto* m = mask->GetBufferPointer();
+  for (std::size_t i = 0; i < n; ++i)
+    if (m[i] != 0) values.push_back(d[i]);
+  if (values.empty()) return 0.0;
+  const double rank = std::clamp(percentile, 0.0, 100.0) / 100.0 * static_cast<double>(values.size() - 1);
+  const auto k = static_cast<std::size_t>(std::lround(rank));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+} // namespace
+
+std::string describeThresholdRule(const SegmentationOptions& options) {
+  auto hu = [](double v) {
+    std::ostringstream text;
+    text << v;
+    return text.str();
+  };
+  if (options.differenceThresholdHU) return "above a fixed " + hu(*options.differenceThresholdHU) + " HU";
+  return "above half the cement's own contrast (the " + hu(options.contrastPercentile) +
+         "th percentile of the difference in the component above " + hu(options.seedThresholdHU) +
+         " HU, halved; at least " + hu(options.minimumThresholdHU) + " HU)";
+}
+
+SegmentationResult segmentCement(const ImageType* post, const ImageType* pre,
+                                 const SegmentationOptions& options) {
+  for (const double v : {options.seedThresholdHU, options.contrastPercentile, options.minimumThresholdHU,
+                         options.differenceThresholdHU.value_or(0.0)}) {
+    if (!std::isfinite(v)) throw std::invalid_argument("cement segmentation: a threshold option is not finite");
+  }
+  const ImageType::Pointer diff = differenceImage(post, pre);
+  SegmentationResult result;
+  SelectedComponent chosen;
+  if (options.differenceThresholdHU) {
+    result.thresholdRule = "fixed";
+    result.thresholdHU = *options.differenceThresholdHU;
+    chosen = selectComponent(diff, result.thresholdHU, options);
+  } else {
+    result.thresholdRule = "half-contrast";
+    const SelectedComponent seed = selectComponent(diff, options.seedThresholdHU, options);
+    if (seed.selection == "none") {
+      result.thresholdHU = options.seedThresholdHU;
+      chosen = seed;
+    } else {
+      result.cementContrastHU = percentileInMask(diff, seed.mask, options.contrastPercentile);
+      result.thresholdHU = std::max(0.5 * result.cementContrastHU, options.minimumThresholdHU);
+      chosen = selectComponent(diff, result.thresholdHU, options);
+    }
+  }
+  result.componentsFound = chosen.componentsFound;
+  result.selection = chosen.selection;
+  result.distanceToInjectionPointMm = chosen.distanceToInjectionPointMm;
+  const std::size_t n = pre->GetLargestPossibleRegion().GetNumberOfPixels();
+
+  MaskType::Pointer mask = chosen.mask;
+  if (chosen.selection != "none" && options.closingRadiusMm > 0.0) {
     using Ball = itk::BinaryBallStructuringElement<std::uint8_t, 3>;
     Ball ball;
     Ball::SizeType radius;
@@ -126,7 +200,7 @@ SegmentationResult segmentCement(const ImageType* post, const ImageType* pre,
     ball.SetRadius(radius);
     ball.CreateStructuringElement();
     auto closing = itk::BinaryMorphologicalClosingImageFilter<MaskType, MaskType, Ball>::New();
-    closing->SetInput(candidate);
+    closing->SetInput(chosen.mask);
     closing->SetKernel(ball);
     closing->SetForegroundValue(1);
     closing->SetSafeBorder(true);
@@ -135,6 +209,7 @@ SegmentationResult segmentCement(const ImageType* post, const ImageType* pre,
     mask->DisconnectPipeline();
   }
   result.mask = mask;
+  result.voxels = 0;
   const auto* mm = mask->GetBufferPointer();
   for (std::size_t i = 0; i < n; ++i) result.voxels += mm[i] != 0;
   result.volumeMl = static_cast<double>(result.voxels) * voxelVolumeMm3(mask) / 1000.0;

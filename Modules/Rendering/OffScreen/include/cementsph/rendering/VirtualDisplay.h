@@ -1,9 +1,10 @@
-// An X display for VTK on machines that have none.
+// An X display for VTK on machines that have none: the last of the rendering backends (RenderBackend.h),
+// used only when neither OSMesa nor surfaceless EGL gives a context, or when CEMENTSPH_RENDER_BACKEND=x.
 //
-// Debian's VTK 9.1 is built for GLX only (no OSMesa, no EGL): a render window without a reachable X
-// display aborts the whole process. ensureDisplay() is therefore the first call of every rendering entry
-// point. If DISPLAY names a server we can connect to, it does nothing; otherwise it starts a private
-// Xvfb (Mesa llvmpipe does the drawing), points DISPLAY at it, and stops it when the program exits.
+// An X render window without a reachable X display aborts the whole process, so the X backend calls
+// ensureDisplay() before it makes one. If DISPLAY names a server we can connect to, it does nothing;
+// otherwise it starts a private Xvfb (Mesa llvmpipe does the drawing), points DISPLAY at it, and stops it
+// when the program exits.
 #pragma once
 
 #include <string>
