@@ -3,14 +3,20 @@
 // Assembly (as Testing/Core/SPH/InjectionScene.h, with the CT's porous solid): model preset (+ the scene's
 // overrides), d = 2r, h = (h/d) d; the porous solid of the ROI (PorousSolid.h) as fixed particles of mass
 // rho0 V_voxel; the cannula emitter (volume-exact, optional wall of length cannula_length_mm, clipped to the
-// ROI); the viscosity schedule applied each step; a six-point tip-pressure ring (TipPressureProbe). The
-// simulation box is the ROI: particles leaving it are removed and counted (possible leakage).
+// ROI); the viscosity schedule applied each step; the pressure model chosen from the scene's dimensionless
+// numbers (ModelSelection.h; scene key pressure_model). The outlet pressure: with the equation of state the
+// paper's six-point ring (TipPressureProbe, model pressure); incompressible, the mean pressure of the cement
+// the outlet's source feeds (gauge Pa). The simulation box is the ROI: particles leaving it are removed and
+// counted (possible leakage).
 //
 // Files in outDir (each written atomically, temporary name then rename):
 //   metrics.json        the run's figures (see docs/scene-figures.md)
-//   tip_pressure.csv    time_s, pressure_pa, pressure_minus_baseline_pa (baseline: mean of the first 0.5 s)
+//   tip_pressure.csv    time_s, pressure_pa (outlet), pressure_minus_baseline_pa (equation of state: baseline
+//                       the mean of the first 0.5 s; incompressible: none, the pressure itself),
+//                       cannula_pressure_drop_pa (Hagen-Poiseuille), injection_pressure_pa (outlet + cannula)
 //   particles_NNNN.vtp  every snapshot_interval_s and at the end; positions in mm (the CT's frame), point
-//                       arrays velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s
+//                       arrays velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s, viscosity_pa_s,
+//                       volume_fraction (the incompressible model's kernel sum), front (1 at the cement front)
 //   particles.pvd       the ParaView series of the snapshots
 //   simulated_ct.nrrd   the CT's grid within the ROI: HU_sim = HU_pre + k rho_fluid / rho0, rho_fluid the Eq. 2
 //                       fluid density at the voxel centre with h = 2r (ParticleVoxeliser), k = 3000 HU
