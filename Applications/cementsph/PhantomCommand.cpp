@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 namespace {
@@ -116,6 +117,18 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
     const auto size = foam.ct->GetLargestPossibleRegion().GetSize();
     truth["foam"]["voxels"] = {size[0], size[1], size[2]};
     truth["foam"]["generation_time_s"] = foamS;
+    // The command that makes these files again (generation times aside), with every option spelled out.
+    std::ostringstream command;
+    command << "cementsph phantom --out " << a->out << " --size-mm " << fo.sizeMm[0] << "," << fo.sizeMm[1] << ","
+            << fo.sizeMm[2] << " --cell-size-mm " << fo.cellSizeMm;
+    if (fo.porosity) command << " --porosity " << *fo.porosity;
+    else command << " --strut-thickness-mm " << *fo.strutThicknessMm;
+    command << " --shell-mm " << fo.shellMm << " --air-margin-mm " << fo.airMarginMm << " --noise-hu " << fo.noiseHu
+            << " --seed " << fo.seed;
+    if (a->noPost) command << " --no-post";
+    else command << " --volume-ml " << po.volumeMl << " --viscosity-pa-s " << po.viscosityPaS;
+    if (a->postDicom) command << " --post-dicom";
+    truth["command"] = command.str();
 
     PostResult post;
     if (!a->noPost) {
@@ -144,6 +157,9 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
                             {"volume_injected_ml", post.injectionMetrics.value("volume_injected_ml", 0.0)},
                             {"fluid_particles", post.injectionMetrics.value("fluid_particles", 0)},
                             {"escaped_particles", post.injectionMetrics.value("escaped_particles", 0)},
+                            {"steps", post.injectionMetrics.value("steps", 0)},
+                            {"numerics", toJson(po.numerics)},
+                            {"scene", post.scene},
                             {"generation_time_s", postS}};
     }
 

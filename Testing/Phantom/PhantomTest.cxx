@@ -198,3 +198,47 @@ TEST(FoamPhantom, BadInputIsOneLineNamingTheOption) {
   p.viscosityPaS = -5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
+
+TEST(PhantomNumerics, TheInjectionSceneSetsEveryNumericChoiceItself) {
+  // Every model key on the scene, from the pinned numerics, not from a scene or engine default.
+  const PhantomNumerics n;
+  const cementsph::scene::SceneConfig sc = phantomInjectionScene(n, {22.325, 21.855, 21.75}, 1.0, 100.0, 0.05);
+  EXPECT_EQ(sc.modelPreset, "default");
+  ASSERT_TRUE(sc.integrator && sc.dragCoefficient && sc.soundSpeedMPerS && sc.fixedParticleSums &&
+              sc.maxDisplacementOverH && sc.neighbourSkinOverH);
+  EXPECT_EQ(*sc.integrator, "overdamped");
+  EXPECT_EQ(*sc.dragCoefficient, 8.7);
+  EXPECT_EQ(*sc.soundSpeedMPerS, 1.0);
+  EXPECT_EQ(sc.fixedSumMethod(), cementsph::sph::FixedSumMethod::Exact);
+  EXPECT_EQ(*sc.maxDisplacementOverH, 0.05);
+  EXPECT_EQ(*sc.neighbourSkinOverH, 0.2);
+  EXPECT_EQ(sc.particleRadiusMm, 0.57);
+  EXPECT_EQ(sc.solidMassFactor, 8.0);
+  EXPECT_EQ(sc.roiSizeMm, 40.0);
+  EXPECT_EQ(sc.volumeMl, 1.0);
+  EXPECT_EQ(sc.viscosityPaS, 100.0);
+  EXPECT_EQ(sc.direction, Eigen::Vector3d::UnitZ());
+  // The record holds them all, with units in the keys.
+  const nlohmann::json j = toJson(n);
+  EXPECT_EQ(j.at("fixed_particle_sums"), "exact");
+  EXPECT_EQ(j.at("max_displacement_over_h"), 0.05);
+  EXPECT_EQ(j.at("h_over_d"), 1.0);
+  EXPECT_EQ(j.at("viscosity_model"), "drag");
+}
+
+TEST(PhantomNumerics, APresetThatNoLongerMatchesIsOneClearError) {
+  EXPECT_NO_THROW(checkModelPreset(PhantomNumerics{})); // the preset "default" is still the phantom's model
+  PhantomNumerics n;
+  n.hOverD = 0.5; // as if the preset had changed under the phantom
+  try {
+    checkModelPreset(n);
+    FAIL() << "a mismatching preset was accepted";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("h/d 1 where the phantom's numerics pin 0.5"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+  n = PhantomNumerics{};
+  n.viscosityModel = "morris";
+  EXPECT_THROW(checkModelPreset(n), std::runtime_error);
+}

@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <iomanip>
+#include <iostream>
+
 using namespace cementsph::sph;
 
 namespace {
@@ -46,16 +49,32 @@ TEST_F(DarcyValidation, VelocityIsLinearInBodyForce) {
 }
 
 TEST_F(DarcyValidation, PermeabilityIndependentOfViscosity) {
+  // Exact by construction in the overdamped model: v = a / gamma with gamma proportional to mu, and every step
+  // limit (overdamped stability ~ gamma, displacement ~ 1/|v|) scales with mu too, so 10x the viscosity takes
+  // the same steps through the same positions, 10x longer, and u / F_B falls by exactly 1/mu: k = mu u / (rho0
+  // F_B) is unchanged up to round-off (10 is not a power of two, so the last bits differ). 12k steps of
+  // particles rearranging past fixed ones amplify that round-off: measured 4.6e-6 (the Cf scaling below, the
+  // same construction on a smaller box and fewer steps, 5e-12); allowed 1e-4, 300x tighter than the 3 % before.
   const DarcyResult viscous = runCase(0.7, 1.0, 100.0);
-  EXPECT_NEAR(viscous.permeability / reference_->permeability, 1.0, 0.03); // issue: within 3 %
-  std::cout << "k(100 Pa.s) / k(10 Pa.s) = " << viscous.permeability / reference_->permeability << "\n";
+  std::cout << std::setprecision(17) << "k(100 Pa.s) / k(10 Pa.s) - 1 = " << viscous.permeability / reference_->permeability - 1
+            << ", steps " << viscous.steps << " vs " << reference_->steps << "\n";
+  EXPECT_EQ(viscous.steps, reference_->steps);
+  EXPECT_NEAR(viscous.permeability / reference_->permeability, 1.0, 1e-4);
 }
 
 TEST_F(DarcyValidation, DimensionlessPermeabilityIndependentOfSpacing) {
+  // Exact by construction: halving d halves every length (h = d, positions), the default body forces scale
+  // as 1/d (bodyForceSweep), the pressure acceleration cs^2 grad(rho)/rho as 1/d, and gamma ~ m / h^5 as
+  // 1/d^2, so velocities halve and the run repeats itself at half the scale with the same steps. The factor
+  // 1/2 is a power of two: every product is the same to the last bit, k/d^2 is identical and k is a quarter
+  // (measured: both exact; 1e-12 allowed).
   const DarcyResult fine = runCase(0.7, 0.5, 10.0);
-  EXPECT_NEAR(fine.dimensionlessPermeability / reference_->dimensionlessPermeability, 1.0, 0.10); // 10 %
-  std::cout << "k/d^2(0.5 mm) / k/d^2(1 mm) = " << fine.dimensionlessPermeability / reference_->dimensionlessPermeability << "\n";
-  EXPECT_NEAR(fine.permeability / reference_->permeability, 0.25, 0.025); // k itself scales with d^2
+  std::cout << std::setprecision(17) << "k/d^2(0.5 mm) / k/d^2(1 mm) - 1 = "
+            << fine.dimensionlessPermeability / reference_->dimensionlessPermeability - 1 << ", k ratio "
+            << fine.permeability / reference_->permeability << ", steps " << fine.steps << " vs " << reference_->steps << "\n";
+  EXPECT_EQ(fine.steps, reference_->steps);
+  EXPECT_NEAR(fine.dimensionlessPermeability / reference_->dimensionlessPermeability, 1.0, 1e-12);
+  EXPECT_NEAR(fine.permeability / reference_->permeability, 0.25, 0.25e-12); // k itself scales with d^2
 }
 
 TEST_F(DarcyValidation, PermeabilityRisesWithPorosity) {
@@ -82,7 +101,10 @@ TEST(DarcyCalibration, PermeabilityScalesAsOneOverDragCoefficient) {
   const DarcyResult base = DarcyBenchmark(preset.model, preset.hOverD).run(c);
   preset.model.dragCoefficient *= 2.5;
   const DarcyResult stiff = DarcyBenchmark(preset.model, preset.hOverD).run(c);
-  EXPECT_NEAR(stiff.permeability / base.permeability, 1.0 / 2.5, 1e-6);
+  std::cout << std::setprecision(17) << "k(2.5 Cf) / k(Cf) * 2.5 - 1 = " << stiff.permeability / base.permeability * 2.5 - 1
+            << ", steps " << stiff.steps << " vs " << base.steps << "\n";
+  EXPECT_EQ(stiff.steps, base.steps);
+  EXPECT_NEAR(stiff.permeability / base.permeability, 1.0 / 2.5, 1e-9); // round-off: measured 5e-12
 }
 
 TEST(DarcyIntegrators, OverdampedMatchesCentralDifference) {
@@ -94,7 +116,10 @@ TEST(DarcyIntegrators, OverdampedMatchesCentralDifference) {
   const DarcyResult cd = runCase(0.8, 1.0, 1.0, Integrator::CentralDifference, forces, 1.0);
   ASSERT_TRUE(od.converged);
   ASSERT_TRUE(cd.converged);
-  EXPECT_NEAR(od.permeability / cd.permeability, 1.0, 0.02); // issue: within 2 %
+  // Not exact by construction: the central difference keeps the particles' inertia, which the overdamped limit
+  // drops (relaxation time 1/gamma against the step), and the two trajectories part by round-off as well.
+  // Measured 7.3e-4; allowed 5e-3 (the issue asked for 2 %).
+  EXPECT_NEAR(od.permeability / cd.permeability, 1.0, 5e-3);
   EXPECT_LT(od.steps, cd.steps);
   RecordProperty("overdamped_steps", std::to_string(od.steps));
   RecordProperty("central_difference_steps", std::to_string(cd.steps));

@@ -164,14 +164,54 @@ TEST(Injection, CannulaWallKeepsTheCementOutOfTheBore) {
   EXPECT_LT(std::hypot(c.centroid.x(), c.centroid.y()), 0.1 * kD);
 }
 
-TEST(Injection, ViscosityScheduleDrivesTheRun) {
-  // The paper's linear rise: after 2 s at 50 + 25 t Pa.s the simulation holds mu(2 s) = 100 Pa.s.
-  InjectionScene s = makeInjectionScene(50.0, kQ, 0.15 * kMl, false);
-  s.viscosity = ViscositySchedule::linear(50.0, 25.0);
-  s.runUntil(2.0);
-  const double t = s.sim->time();
-  s.viscosity.apply(*s.sim);
-  EXPECT_NEAR(s.sim->parameters().viscosity, 50.0 + 25.0 * t, 1e-9);
+TEST(Injection, ViscosityScheduleIsThePapersLinearRise) {
+  // The paper's linear rise mu(t) = mu0 + rate t, by hand at chosen times: 50 + 25 t Pa.s.
+  const ViscositySchedule s = ViscositySchedule::linear(50.0, 25.0);
+  EXPECT_DOUBLE_EQ(s.at(0.0), 50.0);
+  EXPECT_DOUBLE_EQ(s.at(2.0), 100.0);
+  EXPECT_DOUBLE_EQ(s.at(4.4), 160.0);
+  EXPECT_DOUBLE_EQ(s.at(100.0), 2550.0);
+  EXPECT_DOUBLE_EQ(s.at(-3.0), 50.0); // before the injection starts: mu0
+  // A table: piecewise linear between (0 s, 50), (10 s, 150), (20 s, 450); held outside.
+  const ViscositySchedule t = ViscositySchedule::table({{0.0, 50.0}, {10.0, 150.0}, {20.0, 450.0}});
+  EXPECT_DOUBLE_EQ(t.at(5.0), 100.0);
+  EXPECT_DOUBLE_EQ(t.at(15.0), 300.0);
+  EXPECT_DOUBLE_EQ(t.at(30.0), 450.0);
+  EXPECT_DOUBLE_EQ(t.at(-1.0), 50.0);
+}
+
+TEST(Injection, ViscosityScheduleDrivesTheDrag) {
+  // The engine must use mu(t) in its Eq. 9 drag at every step: an isolated particle under a body force g
+  // moves, overdamped, at v = g / gamma with gamma = Cf m mu / (rho^2 h^5) and rho = m W(0) = m / (pi h^3),
+  // so gamma = Cf mu pi^2 h / m and v = g m / (Cf pi^2 h mu(t)): v mu(t) is constant and v(t) / v(0) =
+  // mu(0) / mu(t). The schedule is applied with an injection start of 1 s (times before it read mu0).
+  const double h = kD, m = 1180.0 * kD * kD * kD, Cf = 8.7, g = 1.0, pi = 3.14159265358979323846;
+  ModelParameters p;
+  p.restDensity = 1180.0;
+  p.smoothingLength = h;
+  p.dragCoefficient = Cf;
+  p.viscosityModel = ViscosityModel::Drag;
+  p.integrator = Integrator::Overdamped;
+  p.bodyForce = Eigen::Vector3d(0, 0, -g);
+  p.fixedTimeStep = 0.125; // s, a power of two: the step times 0.125 k are exact
+  Domain domain;
+  domain.lower.setConstant(-10 * kD); // it falls by far less than a spacing
+  domain.upper.setConstant(10 * kD);
+  const ViscositySchedule schedule = ViscositySchedule::linear(50.0, 25.0);
+  p.viscosity = schedule.at(0.0);
+  Simulation sim(p, domain);
+  sim.addFluidParticle(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), m);
+  int checked = 0;
+  while (sim.time() < 5.0) {
+    const double t = sim.time();
+    schedule.apply(sim, 1.0);
+    sim.step();
+    const double mu = t < 1.0 ? 50.0 : 50.0 + 25.0 * (t - 1.0); // by hand
+    const double v = g * m / (Cf * pi * pi * h * mu);
+    ASSERT_NEAR(-sim.fluid().vz[0], v, 1e-12 * v) << "t " << t << " s, mu " << mu << " Pa.s";
+    ++checked;
+  }
+  EXPECT_EQ(checked, 40);
 }
 
 TEST(Injection, VoxelisedCloudHoldsTheInjectedMass) {

@@ -365,15 +365,13 @@ PostResult makePost(const FoamResult& foam, const FoamOptions& fo, const PostOpt
   for (int a = 0; a < 3; ++a) r.requestedTipMm[a] = 0.5 * (foam.blockMinMm[a] + foam.blockMaxMm[a]);
   r.tipMm = nearestPoreMm(foam, fo, r.requestedTipMm);
 
-  scene::SceneConfig sc = scene::scenePreset("paper");
-  sc.tipMm = Eigen::Vector3d(r.tipMm[0], r.tipMm[1], r.tipMm[2]);
-  sc.volumeMl = po.volumeMl;
-  sc.viscosityPaS = po.viscosityPaS;
-  sc.flowRateMlPerS = po.flowRateMlPerS;
-  sc.snapshotIntervalS = 1e9;
-  sc.validate();
+  checkModelPreset(po.numerics);
+  const scene::SceneConfig sc =
+      phantomInjectionScene(po.numerics, r.tipMm, po.volumeMl, po.viscosityPaS, po.flowRateMlPerS);
+  r.scene = scene::toJson(sc);
   scene::InjectionRunOptions ro;
   ro.progress = po.progress;
+  ro.huPerRelativeDensity = po.numerics.huPerRelativeDensity;
   const auto run = scene::runInjection(foam.ct, sc, ro);
   r.injectionMetrics = run.metrics;
 
@@ -394,7 +392,7 @@ PostResult makePost(const FoamResult& foam, const FoamOptions& fo, const PostOpt
         sim->TransformIndexToPhysicalPoint(ri, p);
         imaging::ImageType::IndexType ci;
         if (!foam.ct->TransformPhysicalPointToIndex(p, ci)) continue;
-        const double rel = (sv[(k * rn[1] + j) * rn[0] + i] - foam.ct->GetPixel(ci)) / 3000.0;
+        const double rel = (sv[(k * rn[1] + j) * rn[0] + i] - foam.ct->GetPixel(ci)) / po.numerics.huPerRelativeDensity;
         if (rel >= po.cementThreshold) {
           cemented->SetPixel(ci, static_cast<float>(po.cementHu));
           ++r.cementVoxels;

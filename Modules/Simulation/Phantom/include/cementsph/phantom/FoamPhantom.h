@@ -10,13 +10,14 @@
 // sub-sample outside the block is shell), then an air margin (air_margin_mm). Then Gaussian noise (sigma noise_hu, seeded), HU rounded to
 // integers. Physical frame: origin at the first voxel centre, mm, identity direction.
 //
-// Post: an injection (InjectionRunner, scene "paper" with the tip at the block centre, moved to the nearest
-// pore voxel, direction +z) on the pre CT; cement (cement_hu) replaces the voxel where the simulated CT's
+// Post: an injection (InjectionRunner, every numeric choice pinned by PhantomNumerics.h, the tip at the block
+// centre moved to the nearest pore voxel, direction +z) on the pre CT; cement (cement_hu) replaces the voxel where the simulated CT's
 // rho_fluid / rho0 >= cement_threshold; then a known affine misalignment (post(y) = cemented(A^-1 y), trilinear,
 // air outside) and fresh noise (seed + 1).
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/phantom/PhantomNumerics.h"
 
 #include <nlohmann/json.hpp>
 
@@ -72,6 +73,7 @@ struct PostOptions {
   double cementHu = 3000.0;
   double cementThreshold = 0.5;  // rho_fluid / rho0
   AffineParameters misalignment;
+  PhantomNumerics numerics; // the injection's model and numerics, all pinned
   bool progress = false;
   // Throws std::invalid_argument with one line naming the option.
   void validate() const;
@@ -83,6 +85,7 @@ struct PostResult {
   double cementVolumeMl = 0;                        // voxels made cement x voxel volume (before misalignment)
   std::size_t cementVoxels = 0;
   nlohmann::json injectionMetrics;
+  nlohmann::json scene;                             // the injection's scene as run (scene::toJson)
   AffineParameters misalignment;                    // with its centre
 };
 
