@@ -40,7 +40,6 @@ TEST(DemoCommand, RunsTheBundledPipelineAndAgreesWithThePhantom) {
   EXPECT_GE(demo.at("xray").at("final_frame_dice").get<double>(), 0.8);
   EXPECT_GT(demo.at("xray").at("final_frame_iou").get<double>(), 0.0);
   EXPECT_EQ(demo.at("compare").at("dice").get<double>(), m.at("dice").get<double>());
-  EXPECT_LT(demo.at("wall_time_s").get<double>(), 60.0);
   // The post scan is the model's own (cementsph phantom): the demo must not present the comparison as a validation.
   EXPECT_EQ(demo.at("post_scan_made_by").get<std::string>(), "the model itself (pipeline check, not a validation)");
   std::ifstream inj(out / "inject" / "metrics.json");

@@ -30,6 +30,7 @@ scene::SceneConfig phantomInjectionScene(const PhantomNumerics& n, const std::ar
   sc.dragCoefficient = n.dragCoefficient;
   sc.soundSpeedMPerS = n.soundSpeedMPerS;
   sc.integrator = n.integrator;
+  sc.pressureModel = n.pressureModel;
   sc.fixedParticleSums = n.fixedParticleSums;
   sc.fixedFieldSpacingOverH.reset(); // exact sums use no table
   sc.maxDisplacementOverH = n.maxDisplacementOverH;
@@ -71,6 +72,7 @@ nlohmann::json toJson(const PhantomNumerics& n) {
           {"neighbour_skin_over_h", n.neighbourSkinOverH},
           {"relisting", n.relisting},
           {"integrator", n.integrator},
+          {"pressure_model", n.pressureModel},
           {"drag_coefficient", n.dragCoefficient},
           {"sound_speed_m_per_s", n.soundSpeedMPerS},
           {"fixed_particle_sums", n.fixedParticleSums},

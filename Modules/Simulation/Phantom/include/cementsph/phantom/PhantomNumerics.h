@@ -32,6 +32,7 @@ struct PhantomNumerics {
   bool relisting = true;              // neighbour-list relisting (the same pairs as full rebuilds)
   // Set on the scene.
   std::string integrator = "overdamped";
+  std::string pressureModel = "equation-of-state"; // Eq. 6 (weakly compressible), whatever the scene default
   double dragCoefficient = 8.7;
   double soundSpeedMPerS = 1.0;
   std::string fixedParticleSums = "exact"; // pair by pair (no table)
