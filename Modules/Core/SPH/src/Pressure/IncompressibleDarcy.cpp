@@ -22,8 +22,9 @@ inline double laplacianWeight(const CubicSplineKernel& k, double r2, double eta2
 }
 } // namespace
 
-double IncompressibleDarcy::laplacianLatticeFactor(double h, double a) {
-  // (L x^2) / 2 at a lattice point: 1 for an exact Laplacian (1.013 at a = h, 0.816 at a = 1.26 h).
+namespace {
+// a^3 sum over the simple cubic lattice points n a within the support (n != 0) of G(|n a|) times weight(n a).
+template <class Weight> double latticeSum(double h, double a, Weight weight) {
   const CubicSplineKernel k(h);
   const double eta2 = 0.01 * h * h, support = k.support();
   const int m = static_cast<int>(std::ceil(support / a));
@@ -32,26 +33,20 @@ double IncompressibleDarcy::laplacianLatticeFactor(double h, double a) {
     for (int j = -m; j <= m; ++j)
       for (int l = -m; l <= m; ++l) {
         const double r2 = a * a * double(i * i + j * j + l * l);
-        if (r2 > 0 && r2 < support * support) sum += laplacianWeight(k, r2, eta2) * (i * a) * (i * a);
+        if (r2 > 0 && r2 < support * support) sum += laplacianWeight(k, r2, eta2) * weight(i * a);
       }
-  return 0.5 * sum * a * a * a;
+  return sum * a * a * a;
+}
+} // namespace
+
+double IncompressibleDarcy::laplacianLatticeFactor(double h, double a) {
+  // (L x^2) / 2 at a lattice point: 1 for an exact Laplacian (1.013 at a = h, 0.816 at a = 1.26 h).
+  return 0.5 * latticeSum(h, a, [](double x) { return x * x; });
 }
 
 double IncompressibleDarcy::fullKernelLaplacianSum(double h, double a) {
-  // The lattice sum a^3 sum_n G(|n| a) over a simple cubic lattice (n != 0), the full kernel of a particle
-  // in bulk cement at rest.
-  const CubicSplineKernel k(h);
-  const double eta2 = 0.01 * h * h, support = k.support();
-  const int m = static_cast<int>(std::ceil(support / a));
-  double sum = 0.0;
-  for (int i = -m; i <= m; ++i)
-    for (int j = -m; j <= m; ++j)
-      for (int l = -m; l <= m; ++l) {
-        if (i == 0 && j == 0 && l == 0) continue;
-        const double r2 = a * a * double(i * i + j * j + l * l);
-        if (r2 < support * support) sum += laplacianWeight(k, r2, eta2);
-      }
-  return sum * a * a * a;
+  // The full kernel of a particle in bulk cement at rest.
+  return latticeSum(h, a, [](double) { return 1.0; });
 }
 
 void IncompressibleDarcy::density(Simulation& sim) {
