@@ -401,10 +401,12 @@ void Simulation::updateAccelerations() {
   // The force pass needs the lists and densities of the current particle set: if particles were added
   // or removed since the last density update, do that update first.
   const std::size_t n = fluid_.size();
-  if (!listsValid_ || relistsDirty_ || refX_.size() != n || fluid_.density.size() != n ||
-      (tabulated_ && fixedGradX_.size() != n))
-    updateDensityAndPressure();
-  if (pressureModel_->makesAccelerations()) return;
+  const bool stale = !listsValid_ || relistsDirty_ || refX_.size() != n || fluid_.density.size() != n;
+  if (pressureModel_->makesAccelerations()) { // its pressure() made them (with the current particle set)
+    if (stale) updateDensityAndPressure();
+    return;
+  }
+  if (stale || (tabulated_ && fixedGradX_.size() != n)) updateDensityAndPressure();
   if (parameters_.viscosityModel == ViscosityModel::Morris) forcePass<true>();
   else forcePass<false>();
 }

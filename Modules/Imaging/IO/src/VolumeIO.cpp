@@ -255,7 +255,7 @@ ImageType::Pointer readVolume(const std::string& path) {
 
 namespace {
 
-template <typename TImage> void writeImage(const TImage* image, const std::string& path) {
+template <typename TImage> void writeImage(const TImage* image, const std::string& path, bool compress = true) {
   if (!image) throw std::runtime_error(path + ": nothing to write");
   if (!imageIOForExtension(path) || fullExtension(path) == ".dcm")
     throw std::runtime_error(path + ": unknown output format (use .nrrd, .mha, .nii or .nii.gz)");
@@ -264,7 +264,7 @@ template <typename TImage> void writeImage(const TImage* image, const std::strin
     writer->SetImageIO(imageIOForExtension(path));
     writer->SetFileName(tmp);
     writer->SetInput(image);
-    writer->SetUseCompression(true);
+    writer->SetUseCompression(compress);
     try {
       writer->Update();
     } catch (const itk::ExceptionObject& e) {
@@ -275,7 +275,7 @@ template <typename TImage> void writeImage(const TImage* image, const std::strin
 
 } // namespace
 
-void writeVolume(const ImageType* image, const std::string& path) { writeImage(image, path); }
+void writeVolume(const ImageType* image, const std::string& path, bool compress) { writeImage(image, path, compress); }
 void writeMask(const MaskType* mask, const std::string& path) { writeImage(mask, path); }
 
 } // namespace cementsph::imaging

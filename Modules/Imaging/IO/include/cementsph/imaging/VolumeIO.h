@@ -35,7 +35,9 @@ ImageType::Pointer readVolume(const std::string& path);
 
 // Writes atomically (temporary sibling, then rename). The format follows the extension; a path
 // without a known extension is an error (NRRD is what the applications choose by default).
-void writeVolume(const ImageType* image, const std::string& path);
+// compress: deflate the data (NRRD gzip, MetaImage zlib); off for small images written on a hot path (a
+// DRR: deflating a 512^2 float image costs more than its bytes save).
+void writeVolume(const ImageType* image, const std::string& path, bool compress = true);
 void writeMask(const MaskType* mask, const std::string& path);
 
 // Writes a DICOM series (one file per slice, int16, CT modality) into directory, which is created.
