@@ -46,7 +46,7 @@ SphereRun injectIntoContinuum(double porosity, double permeability, double visco
   m.maxTimeStep = emitter.maxTimeStep();
   Simulation sim(m, domain);
   const double sourceRadius = 0.5 * spec.innerDiameter + 0.5 * d;
-  sim.setVolumeSource({spec.tip, sourceRadius, Q, spec.direction});
+  sim.setVolumeSource({spec.tip, sourceRadius, Q});
   const double T = volume / Q;
   while (sim.time() < T) {
     emitter.emit(sim);
@@ -126,7 +126,9 @@ TEST(IncompressibleDarcy, SphericalInjectionKeepsItsVolumeAndFillsTheBall) {
     const SphereRun r = injectIntoContinuum(phi, k, mu, V);
     const double R = std::cbrt(3 * r.emittedVolume / (4 * 3.14159265358979323846 * phi));
     EXPECT_NEAR(r.cementVolume / r.emittedVolume, 1.0, 0.01) << "porosity " << phi;
-    if (phi == 1.0) EXPECT_NEAR(r.meanDistance / (0.75 * R), 1.0, 0.03) << "porosity " << phi;
+    if (phi == 1.0) {
+      EXPECT_NEAR(r.meanDistance / (0.75 * R), 1.0, 0.03) << "porosity " << phi;
+    }
   }
 }
 

@@ -150,7 +150,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
       sph::TipPressureProbe::ringAroundTip(tip, spec.direction, 0.5 * spec.innerDiameter, 6, d));
   // The incompressible model's source: the flow enters the cement within sourceRadius of the outlet.
   const double sourceRadius = 0.5 * spec.innerDiameter + 0.5 * d;
-  if (incompressible) sim.setVolumeSource({tip, sourceRadius, spec.flowRate, spec.direction});
+  if (incompressible) sim.setVolumeSource({tip, sourceRadius, spec.flowRate});
   const double cannulaLength = scene.cannulaLengthMm * 1e-3;
   // Pressure at the outlet [Pa]: incompressible, the mean pressure of the cement the source feeds (the
   // pressure the cannula works against: power = Q p); equation of state, the paper's probe (Eq. 6 ring).

@@ -40,8 +40,6 @@ struct VolumeSource {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double radius = 0.0;
   double rate = 0.0;
-  // Half-space the source feeds: particles with (x - centre) . axis >= -radius/2 (zero axis: all around).
-  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
 };
 
 struct StepStatistics {
@@ -182,10 +180,8 @@ private:
   std::unique_ptr<DomainBoundary> boundary_;
 
 public:
+  // "fluid particle #id at (x, y, z) mm", for the models' error messages.
   std::string describeParticleForModels(std::size_t i) const { return describeParticle(i); }
-  // Time step of Eq. 8 once chosen (central difference), for its integrator.
-  double& centralDifferenceStep() { return centralDifferenceStep_; }
-  const double* minimumImageExtent() const { return extent_; }
 };
 
 } // namespace cementsph::sph
