@@ -204,6 +204,9 @@ public:
     if (!fs::exists(target_)) {
       fs::rename(staging_, target_);
     } else {
+      // An earlier run's frames must not mix with this run's (it may have had more).
+      cementsph::imaging::removeStaleOutputs(target_.string(), {"sequence_drr_####.nrrd", "sequence_drr_####.png",
+                                                                "reference_drr_####.nrrd", "reference_drr_####.png"});
       for (const auto& entry : fs::directory_iterator(staging_))
         fs::rename(entry.path(), target_ / entry.path().filename());
       fs::remove(staging_);

@@ -260,3 +260,17 @@ TEST_F(XrayCommand, AFolderInTheWayOfAnOutputFileMovesNothing) {
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
+
+TEST_F(XrayCommand, AnEarlierRunsExtraFramesAreRemoved) {
+  const fs::path out = dir_ / "rerun";
+  fs::create_directories(out);
+  // A frame number the new run does not make, as a longer earlier sequence would have left it.
+  for (const char* stale : {"sequence_drr_0099.nrrd", "sequence_drr_0099.png"}) std::ofstream(out / stale) << "old";
+  std::ofstream(out / "notes.txt") << "mine"; // not ours: kept
+  const ProgramRun r = runCementsph(listArgs(out));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_FALSE(fs::exists(out / "sequence_drr_0099.nrrd"));
+  EXPECT_FALSE(fs::exists(out / "sequence_drr_0099.png"));
+  EXPECT_TRUE(fs::exists(out / "sequence_drr_0000.nrrd"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
+}
