@@ -14,10 +14,6 @@ namespace cementsph::sph {
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Loops that do a few operations per particle run on one thread below this many particles: their
-// work is microseconds, and every parallel loop ends in a barrier that costs far more when another
-// program holds a core (measured: 2 threads 6x slower than 1 on a loaded 2-core machine).
-constexpr std::size_t kParallelMinimum = 16384;
 
 std::string formatSeconds(double s) {
   char b[32];

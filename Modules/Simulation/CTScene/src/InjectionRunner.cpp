@@ -119,7 +119,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const PorousSolid solid = buildPorousSolid(ct, tipMm, po);
   const double roiVoxels = double(solid.roiSize[0]) * double(solid.roiSize[1]) * double(solid.roiSize[2]);
   const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
-  const ModelChoice choice = chooseModel(scene, m.soundSpeed, roiPorosity);
+  const ModelChoice choice = chooseModel(scene, m.restDensity, m.soundSpeed, roiPorosity);
   m.pressureModel = choice.pressureModel;
   const bool incompressible = m.pressureModel == "incompressible";
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
@@ -175,6 +175,11 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
     for (std::size_t i = 0; i < f.size(); ++i) v += f.mass[i] / f.density[i];
     return v;
   };
+  // Injected against held volume now (volume_history in metrics.json).
+  auto volumeRecord = [&]() {
+    return json{{"time_s", sim.time()}, {"volume_injected_ml", emitter.emittedVolume() * 1e6},
+                {"cement_volume_ml", cementVolume() * 1e6}};
+  };
   json volumeHistory = json::array();
 
   const bool writing = !o.outDir.empty();
@@ -201,8 +206,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   if (ctSnapshots) writeCtSnapshot("simulated_ct_start.nrrd", "", nullptr);
   std::vector<std::pair<double, std::string>> snapshots;
   auto writeSnapshot = [&](const imaging::ImageType* ctNow = nullptr) {
-    volumeHistory.push_back({{"time_s", sim.time()}, {"volume_injected_ml", emitter.emittedVolume() * 1e6},
-                             {"cement_volume_ml", cementVolume() * 1e6}});
+    volumeHistory.push_back(volumeRecord());
     if (!writing) return;
     char name[64];
     std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
@@ -337,8 +341,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   metrics["cement_volume_ml"] = cementVolume() * 1e6;
   {
     json history = volumeHistory; // at every snapshot, and the final state
-    history.push_back({{"time_s", sim.time()}, {"volume_injected_ml", emitter.emittedVolume() * 1e6},
-                       {"cement_volume_ml", cementVolume() * 1e6}});
+    history.push_back(volumeRecord());
     metrics["volume_history"] = history;
   }
   if (incompressible) {

@@ -29,10 +29,10 @@ nlohmann::json ModelChoice::numbersJson() const {
           {"front_pore_pressure_drop_pa", n.frontPorePressurePa}};
 }
 
-ModelChoice chooseModel(const SceneConfig& scene, double soundSpeed, double porosity) {
+ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed, double porosity) {
   ModelChoice c;
   DimensionlessNumbers& n = c.numbers;
-  const double rho0 = 1180.0, d = scene.spacingM(), mu = scene.viscositySchedule().at(0.0);
+  const double d = scene.spacingM(), mu = scene.viscositySchedule().at(0.0);
   const double Q = scene.flowRateM3PerS(), r0 = 0.5 * scene.cannulaInnerDiameterMm * 1e-3;
   const double phi = (porosity > 0 && porosity <= 1) ? porosity : 1.0;
   const double k = kCalibratedPermeabilityOverD2 * d * d;

@@ -15,7 +15,7 @@ StepLimits inertialLimits(const Simulation& sim) {
   if (sim.pressureModel().acoustic()) l.acoustic = p.acousticCourant * h / p.soundSpeed;
   double amax2 = 0;
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) reduction(max : amax2) if (n >= 16384)
+#pragma omp parallel for schedule(static) reduction(max : amax2) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) amax2 = std::max(amax2, f.ax[i] * f.ax[i] + f.ay[i] * f.ay[i] + f.az[i] * f.az[i]);
   if (amax2 > 0) l.force = p.forceCourant * std::sqrt(h / std::sqrt(amax2));
   return l;
@@ -27,7 +27,7 @@ void CentralDifference::integrate(Simulation& sim, double dt) {
   // Eq. 8 with a_i = a_other - gamma v_i and v_i = (r+ - r-) / (2 dt), solved for r+ per particle.
   FluidParticles& f = sim.fluid();
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) if (n >= 16384)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double gdt2 = 0.5 * dt * f.dragRate[i];
     const double inv = 1.0 / (1.0 + gdt2), c = 1.0 - gdt2, dt2 = dt * dt;

@@ -22,7 +22,7 @@ StepLimits ExplicitEuler::limits(const Simulation& sim) const {
 void ExplicitEuler::integrate(Simulation& sim, double dt) {
   FluidParticles& f = sim.fluid();
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) if (n >= 16384)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double g = f.dragRate[i];
     f.vx[i] += dt * (f.ax[i] - g * f.vx[i]);

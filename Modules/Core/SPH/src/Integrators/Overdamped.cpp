@@ -17,7 +17,7 @@ StepLimits Overdamped::limits(const Simulation& sim) const {
   // v = a / gamma; the fastest particle bounds the step for accuracy.
   double vmax2 = 0;
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) reduction(max : vmax2) if (n >= 16384)
+#pragma omp parallel for schedule(static) reduction(max : vmax2) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double g = f.dragRate[i];
     const double a2 = f.ax[i] * f.ax[i] + f.ay[i] * f.ay[i] + f.az[i] * f.az[i];
@@ -30,7 +30,7 @@ StepLimits Overdamped::limits(const Simulation& sim) const {
 void Overdamped::integrate(Simulation& sim, double dt) {
   FluidParticles& f = sim.fluid();
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) if (n >= 16384)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double invG = 1.0 / f.dragRate[i];
     f.vx[i] = f.ax[i] * invG; f.vy[i] = f.ay[i] * invG; f.vz[i] = f.az[i] * invG;

@@ -10,7 +10,7 @@ void EquationOfState::pressure(Simulation& sim) {
   FluidParticles& f = sim.fluid();
   const double cs2 = sim.parameters().soundSpeed * sim.parameters().soundSpeed, rho0 = sim.parameters().restDensity;
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) if (n >= 16384)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) f.pressure[i] = cs2 * (f.density[i] - rho0); // Eq. 6
 }
 

@@ -312,7 +312,7 @@ void IncompressibleDarcy::pressure(Simulation& sim) {
       push[3 * i] += g[0]; push[3 * i + 1] += g[1]; push[3 * i + 2] += g[2];
     }
   const Eigen::Vector3d body = p.bodyForce;
-#pragma omp parallel for schedule(static) if (n >= 16384)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     const double* m = &moment[6 * i];
     Eigen::Matrix3d Mi;

@@ -8,7 +8,7 @@ void PaperDrag::update(Simulation& sim) {
   FluidParticles& f = sim.fluid();
   const ModelParameters& p = sim.parameters();
   const std::size_t n = f.size();
-#pragma omp parallel for schedule(static) if (n >= 16384)
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) f.dragRate[i] = p.dragRate(f.mass[i], f.density[i], f.viscosity[i]); // Eq. 9
 }
 

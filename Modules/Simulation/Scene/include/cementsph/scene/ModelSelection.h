@@ -49,7 +49,7 @@ constexpr double kMarrowViscosityPaS = 0.1;
 constexpr double kCementMarrowTensionNPerM = 0.025;
 constexpr double kCalibratedPermeabilityOverD2 = 0.0711;
 
-// `modelPreset` the sph preset's name; `soundSpeed` [m/s] the model's cs; `porosity` of the medium at the tip.
-ModelChoice chooseModel(const SceneConfig& scene, double soundSpeedMPerS, double porosity);
+// `restDensity` [kg/m^3] and `soundSpeed` [m/s] the model's rho0 and cs; `porosity` of the medium at the tip.
+ModelChoice chooseModel(const SceneConfig& scene, double restDensityKgPerM3, double soundSpeedMPerS, double porosity);
 
 } // namespace cementsph::scene
