@@ -1,0 +1,143 @@
+// Incompressible Darcy filling on the CT's voxel grid: the pressure of the creeping cement is solved on
+// the voxels it fills, and the cement advances voxel by voxel into the pore space (a volume-of-fluid
+// filling scheme, as in the control-volume mould-filling method of Bruschke & Advani 1990, Polym. Compos.
+// 11:398). The issue "Physical cement" allows the pressure on the voxel grid in place of the particles'
+// Poisson equation where it measures better; VALIDATION.md has the figures for both.
+//
+// Model (assumptions and regime, docs/architecture.md):
+//  * Creeping flow (Re << 1, inertia dropped) of an incompressible cement through a rigid porous medium,
+//    Darcy's law q = -(k / mu) grad p for the superficial velocity q [m/s]; div q = s (the cannula's
+//    outflow, a uniform volume source over the pore voxels within `sourceRadius` of the outlet).
+//  * Each voxel has a porosity phi (pore volume fraction; 0 = impermeable: solid, cortex) and a
+//    permeability k [m^2]; a pore-resolved CT gives phi = 1 in pore voxels and 0 in solid ones, a clinical
+//    CT a continuum phi and k from HU.
+//  * The displaced fluid (marrow, or air/water in foam) is at the front's pressure p_front, 0 Pa gauge by
+//    default (its own viscosity neglected: cement/marrow viscosity ratio >> 1).
+//  * Each voxel's fill f in [0, 1] is the fraction of its pore volume that holds cement. A voxel is
+//    filled at f = 1: its pressure is an unknown. A pore voxel beside a filled one with f < 1 is on the
+//    front: the cement's edge in it lies f of the way across it, where p = p_front (a ghost-fluid
+//    Dirichlet condition, Gibou et al. 2002 J Comput Phys 176:205, so the front sits between voxel centres
+//    and the pressure is second-order accurate up to it).
+//  * Two-point flux between voxel centres with the harmonic mean of the mobilities k / mu (no flux into
+//    phi = 0 voxels or across the region's sides).
+//  * One step: solve the pressure (a symmetric positive definite system, Eigen's conjugate gradient with
+//    a Jacobi preconditioner, warm-started), compute the flux into each front voxel, choose dt so that
+//    no voxel gains more than `maxFillPerStep` of its pore volume beyond full, fill, and pass any excess
+//    on to the nearest unfilled pore voxels. The injected volume is kept exactly (to round-off).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cementsph::voxeldarcy {
+
+// The medium on an axis-aligned voxel grid. Coordinates: the CT's patient frame in metres; voxel (i, j, k)
+// has its centre at origin + spacing .* (i, j, k).
+struct VoxelMedium {
+  std::array<int, 3> size{0, 0, 0};
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d spacing = Eigen::Vector3d::Ones();
+  std::vector<float> porosity;      // per voxel, 0 = impermeable
+  std::vector<double> permeability; // per voxel [m^2] (ignored where porosity is 0)
+
+  std::size_t count() const { return std::size_t(size[0]) * std::size_t(size[1]) * std::size_t(size[2]); }
+  std::size_t index(int i, int j, int k) const {
+    return std::size_t(i) + std::size_t(size[0]) * (std::size_t(j) + std::size_t(size[1]) * std::size_t(k));
+  }
+  std::array<int, 3> ijk(std::size_t c) const {
+    const int i = int(c % std::size_t(size[0]));
+    const std::size_t r = c / std::size_t(size[0]);
+    return {i, int(r % std::size_t(size[1])), int(r / std::size_t(size[1]))};
+  }
+  Eigen::Vector3d centre(std::size_t c) const {
+    const auto v = ijk(c);
+    return origin + spacing.cwiseProduct(Eigen::Vector3d(v[0], v[1], v[2]));
+  }
+  double voxelVolume() const { return spacing.prod(); }
+  // A uniform medium (tests, the continuum oracles).
+  static VoxelMedium uniform(std::array<int, 3> size, const Eigen::Vector3d& origin, const Eigen::Vector3d& spacing,
+                             double porosity, double permeability);
+};
+
+struct FillingSettings {
+  double maxFillPerStep = 0.5;      // largest overshoot of a voxel's fill beyond full in one step (excess moves on)
+  double solverTolerance = 1e-8;    // conjugate gradient relative residual
+  int maxSolverIterations = 5000;
+  double frontPressurePa = 0.0;     // pressure of the displaced fluid at the front [Pa gauge]
+};
+
+struct FillingStatistics {
+  std::size_t steps = 0, solves = 0, iterations = 0, unconverged = 0;
+  double worstResidual = 0.0, solveSeconds = 0.0, assemblySeconds = 0.0;
+  std::size_t lastUnknowns = 0, lastFrontVoxels = 0;
+};
+
+// A run that cannot go on (the pore space connected to the source is full; a solve that diverges).
+class FillingError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+class VoxelDarcyFilling {
+public:
+  // Throws std::invalid_argument for an empty or inconsistent medium.
+  VoxelDarcyFilling(VoxelMedium medium, FillingSettings settings = {});
+
+  // The cannula outlet: pore voxels whose centres lie within `radius` [m] of `centre` [m] (at least the voxel
+  // containing the centre). Throws std::invalid_argument when the centre is outside or in an impermeable voxel.
+  void setSource(const Eigen::Vector3d& centre, double radius);
+
+  // Viscosity [Pa s] of every voxel for the next steps (a Newtonian cement: one value). A law that varies
+  // per voxel (shear-thinning) sets them with setVoxelViscosity.
+  void setViscosity(double viscosityPaS);
+  void setVoxelViscosity(std::vector<double> viscosityPaS);
+
+  // Advances by at most dtMax [s] at the flow rate [m^3/s]; returns the step taken (> 0). Throws FillingError
+  // when the cement has nowhere to go.
+  double step(double flowRate, double dtMax);
+
+  // The state.
+  const VoxelMedium& medium() const { return medium_; }
+  double time() const { return time_; }
+  double injectedVolume() const { return injected_; }    // [m^3]
+  double cementVolume() const;                           // sum of f phi V over the voxels [m^3]
+  const std::vector<double>& fill() const { return fill_; }
+  const std::vector<double>& pressure() const { return pressure_; } // [Pa]; front voxels p_front, empty 0
+  const std::vector<double>& viscosity() const { return viscosity_; }
+  const std::vector<double>& arrivalTime() const { return arrival_; } // first cement in the voxel [s]; -1 none
+  bool filled(std::size_t c) const { return state_[c] == kFilled; }
+  const std::vector<std::size_t>& sourceVoxels() const { return source_; }
+  // Superficial (Darcy) velocity at a voxel centre from its face fluxes of the last solve [m/s].
+  Eigen::Vector3d darcyVelocity(std::size_t c) const;
+  // Pore-volume weighted mean pressure of the source voxels (the pressure the cannula works against) [Pa].
+  double sourcePressure() const;
+  const FillingStatistics& statistics() const { return stats_; }
+
+private:
+  enum : std::uint8_t { kClosed = 0, kEmpty = 1, kFilled = 2 };
+  double poreVolume(std::size_t c) const { return double(medium_.porosity[c]) * voxelVolume_; }
+  double mobility(std::size_t c) const { return medium_.permeability[c] / viscosity_[c]; }
+  void depositExcess(std::size_t from, double volume);
+  void markFilled(std::size_t c);
+
+  VoxelMedium medium_;
+  FillingSettings settings_;
+  double voxelVolume_ = 0.0;
+  std::array<double, 3> faceArea_{}, faceDistance_{};
+  std::vector<std::uint8_t> state_;
+  std::vector<double> fill_, pressure_, viscosity_, arrival_;
+  std::vector<float> faceFlux_; // per voxel, 3 faces (+x, +y, +z) of the last solve [m^3/s]
+  std::vector<std::size_t> source_;
+  double time_ = 0.0, injected_ = 0.0;
+  FillingStatistics stats_;
+  std::vector<int> unknown_; // voxel -> unknown index or -1
+};
+
+} // namespace cementsph::voxeldarcy

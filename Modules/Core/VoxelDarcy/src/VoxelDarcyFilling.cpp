@@ -1,0 +1,354 @@
+#include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <sstream>
+
+namespace cementsph::voxeldarcy {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::string mm(const Eigen::Vector3d& p) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "(" << p.x() * 1e3 << ", " << p.y() * 1e3 << ", " << p.z() * 1e3 << ") mm";
+  return s.str();
+}
+} // namespace
+
+VoxelMedium VoxelMedium::uniform(std::array<int, 3> size, const Eigen::Vector3d& origin, const Eigen::Vector3d& spacing,
+                                 double porosity, double permeability) {
+  VoxelMedium m;
+  m.size = size;
+  m.origin = origin;
+  m.spacing = spacing;
+  m.porosity.assign(m.count(), float(porosity));
+  m.permeability.assign(m.count(), permeability);
+  return m;
+}
+
+VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings settings)
+    : medium_(std::move(medium)), settings_(settings) {
+  const std::size_t n = medium_.count();
+  for (int a = 0; a < 3; ++a)
+    if (medium_.size[a] < 1 || !(medium_.spacing[a] > 0) || !std::isfinite(medium_.spacing[a]))
+      throw std::invalid_argument("voxel Darcy: the grid needs at least one voxel and a positive spacing per axis");
+  if (medium_.porosity.size() != n || medium_.permeability.size() != n)
+    throw std::invalid_argument("voxel Darcy: porosity and permeability need one value per voxel");
+  if (!(settings_.maxFillPerStep > 0 && settings_.maxFillPerStep <= 1))
+    throw std::invalid_argument("voxel Darcy: maxFillPerStep must be in (0, 1]");
+  voxelVolume_ = medium_.voxelVolume();
+  for (int a = 0; a < 3; ++a) {
+    faceDistance_[std::size_t(a)] = medium_.spacing[a];
+    faceArea_[std::size_t(a)] = voxelVolume_ / medium_.spacing[a];
+  }
+  state_.assign(n, kClosed);
+  for (std::size_t c = 0; c < n; ++c) {
+    const double phi = medium_.porosity[c], k = medium_.permeability[c];
+    if (!(phi >= 0 && phi <= 1))
+      throw std::invalid_argument("voxel Darcy: porosity " + std::to_string(phi) + " at voxel " + mm(medium_.centre(c)) +
+                                  " is outside [0, 1]");
+    if (phi > 0) {
+      if (!(k > 0) || !std::isfinite(k))
+        throw std::invalid_argument("voxel Darcy: permeability " + std::to_string(k) + " m^2 at the pore voxel " +
+                                    mm(medium_.centre(c)) + " is not a positive number");
+      state_[c] = kEmpty;
+    }
+  }
+  fill_.assign(n, 0.0);
+  pressure_.assign(n, 0.0);
+  viscosity_.assign(n, 1.0);
+  arrival_.assign(n, -1.0);
+  faceFlux_.assign(3 * n, 0.0f);
+  unknown_.assign(n, -1);
+}
+
+void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) {
+  std::array<int, 3> v{};
+  for (int a = 0; a < 3; ++a) {
+    const double u = (centre[a] - medium_.origin[a]) / medium_.spacing[a];
+    const long i = std::lround(u);
+    if (!std::isfinite(u) || i < 0 || i >= medium_.size[a])
+      throw std::invalid_argument("voxel Darcy: the outlet " + mm(centre) + " lies outside the grid");
+    v[std::size_t(a)] = int(i);
+  }
+  const std::size_t own = medium_.index(v[0], v[1], v[2]);
+  if (state_[own] == kClosed)
+    throw std::invalid_argument("voxel Darcy: the outlet " + mm(centre) + " lies in an impermeable voxel");
+  source_.clear();
+  source_.push_back(own);
+  const int r[3] = {int(std::ceil(radius / medium_.spacing[0])), int(std::ceil(radius / medium_.spacing[1])),
+                    int(std::ceil(radius / medium_.spacing[2]))};
+  for (int k = v[2] - r[2]; k <= v[2] + r[2]; ++k)
+    for (int j = v[1] - r[1]; j <= v[1] + r[1]; ++j)
+      for (int i = v[0] - r[0]; i <= v[0] + r[0]; ++i) {
+        if (i < 0 || j < 0 || k < 0 || i >= medium_.size[0] || j >= medium_.size[1] || k >= medium_.size[2]) continue;
+        const std::size_t c = medium_.index(i, j, k);
+        if (c == own || state_[c] == kClosed) continue;
+        if ((medium_.centre(c) - centre).norm() <= radius) source_.push_back(c);
+      }
+  std::sort(source_.begin(), source_.end());
+}
+
+void VoxelDarcyFilling::setViscosity(double mu) {
+  if (!(mu > 0) || !std::isfinite(mu)) throw std::invalid_argument("voxel Darcy: viscosity must be a positive number");
+  std::fill(viscosity_.begin(), viscosity_.end(), mu);
+}
+
+void VoxelDarcyFilling::setVoxelViscosity(std::vector<double> mu) {
+  if (mu.size() != viscosity_.size()) throw std::invalid_argument("voxel Darcy: one viscosity per voxel");
+  viscosity_ = std::move(mu);
+}
+
+double VoxelDarcyFilling::cementVolume() const {
+  double v = 0;
+  for (std::size_t c = 0; c < fill_.size(); ++c)
+    if (fill_[c] > 0) v += fill_[c] * poreVolume(c);
+  return v;
+}
+
+double VoxelDarcyFilling::sourcePressure() const {
+  double sum = 0, w = 0;
+  for (std::size_t c : source_)
+    if (state_[c] == kFilled) {
+      sum += poreVolume(c) * pressure_[c];
+      w += poreVolume(c);
+    }
+  return w > 0 ? sum / w : settings_.frontPressurePa;
+}
+
+Eigen::Vector3d VoxelDarcyFilling::darcyVelocity(std::size_t c) const {
+  const auto v = medium_.ijk(c);
+  Eigen::Vector3d q;
+  for (int a = 0; a < 3; ++a) {
+    const double plus = faceFlux_[3 * c + std::size_t(a)];
+    double minus = 0;
+    if (v[std::size_t(a)] > 0) {
+      const std::size_t stride = a == 0 ? 1 : a == 1 ? std::size_t(medium_.size[0])
+                                                     : std::size_t(medium_.size[0]) * std::size_t(medium_.size[1]);
+      minus = faceFlux_[3 * (c - stride) + std::size_t(a)];
+    }
+    q[a] = 0.5 * (plus + minus) / faceArea_[std::size_t(a)];
+  }
+  return q;
+}
+
+void VoxelDarcyFilling::markFilled(std::size_t c) {
+  state_[c] = kFilled;
+  fill_[c] = 1.0;
+  pressure_[c] = settings_.frontPressurePa; // warm start: the front's pressure, where it was
+}
+
+// Volume beyond a voxel's pore volume moves on to the nearest unfilled pore voxels, reached through
+// filled ones (breadth first), so the injected volume is kept exactly.
+void VoxelDarcyFilling::depositExcess(std::size_t from, double volume) {
+  const int nx = medium_.size[0], ny = medium_.size[1], nz = medium_.size[2];
+  std::deque<std::size_t> queue{from};
+  std::vector<std::size_t> seen{from};
+  auto visited = [&](std::size_t c) { return std::find(seen.begin(), seen.end(), c) != seen.end(); };
+  while (volume > 0 && !queue.empty()) {
+    const std::size_t c = queue.front();
+    queue.pop_front();
+    const auto v = medium_.ijk(c);
+    const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const auto& s : d) {
+      const int i = v[0] + s[0], j = v[1] + s[1], k = v[2] + s[2];
+      if (i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz) continue;
+      const std::size_t n = medium_.index(i, j, k);
+      if (state_[n] == kClosed || visited(n)) continue;
+      seen.push_back(n);
+      if (state_[n] == kEmpty) {
+        const double room = (1.0 - fill_[n]) * poreVolume(n);
+        const double put = std::min(room, volume);
+        if (arrival_[n] < 0) arrival_[n] = time_;
+        fill_[n] += put / poreVolume(n);
+        volume -= put;
+        if (fill_[n] >= 1.0 - 1e-12) markFilled(n);
+        if (volume <= 0) return;
+      } else {
+        queue.push_back(n);
+      }
+    }
+  }
+  if (volume > 1e-18)
+    throw FillingError("voxel Darcy: the pore space connected to the outlet is full (" + std::to_string(volume * 1e9) +
+                       " mm^3 had nowhere to go at t = " + std::to_string(time_) +
+                       " s); enlarge roi_size_mm or inject less");
+}
+
+double VoxelDarcyFilling::step(double flowRate, double dtMax) {
+  if (source_.empty()) throw std::logic_error("voxel Darcy: setSource before step");
+  if (!(dtMax > 0) || !(flowRate >= 0)) throw std::invalid_argument("voxel Darcy: step needs dtMax > 0, flow rate >= 0");
+  const auto t0 = Clock::now();
+  const int nx = medium_.size[0], ny = medium_.size[1];
+  const std::size_t n = medium_.count();
+  const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
+
+  // Unknowns: the filled voxels, numbered in voxel order (so each row's columns come out sorted).
+  int unknowns = 0;
+  for (std::size_t c = 0; c < n; ++c) unknown_[c] = state_[c] == kFilled ? unknowns++ : -1;
+
+  // The source: spread over the filled outlet voxels by pore volume; while none is filled, the cement
+  // goes straight into the outlet voxels.
+  double filledSourcePore = 0, openSourcePore = 0;
+  for (std::size_t c : source_) (state_[c] == kFilled ? filledSourcePore : openSourcePore) += poreVolume(c);
+
+  // Front links: (filled voxel, front voxel, transmissibility).
+  struct Link { std::size_t from, to; double t; };
+  std::vector<Link> links;
+  links.reserve(std::size_t(unknowns) / 2 + 64);
+  Eigen::SparseMatrix<double, Eigen::RowMajor, int> A(unknowns, unknowns);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(unknowns), x(unknowns);
+  if (unknowns > 0) {
+    A.resizeNonZeros(std::size_t(unknowns) * 7);
+    int* outer = A.outerIndexPtr();
+    int* inner = A.innerIndexPtr();
+    double* value = A.valuePtr();
+    int nnz = 0;
+    for (std::size_t c = 0; c < n; ++c) {
+      const int row = unknown_[c];
+      if (row < 0) continue;
+      outer[row] = nnz;
+      x[row] = pressure_[c];
+      const auto v = medium_.ijk(c);
+      const double lc = mobility(c);
+      double diagonal = 0;
+      int diagonalAt = -1;
+      // Neighbours in increasing voxel order: -z, -y, -x, (self), +x, +y, +z.
+      for (int pass = 0; pass < 7; ++pass) {
+        if (pass == 3) {
+          diagonalAt = nnz;
+          inner[nnz] = row;
+          value[nnz++] = 0;
+          continue;
+        }
+        const int axis = pass < 3 ? 2 - pass : pass - 4;
+        const int sign = pass < 3 ? -1 : 1;
+        const int coord = v[std::size_t(axis)] + sign;
+        if (coord < 0 || coord >= medium_.size[axis]) continue;
+        const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[axis]);
+        if (state_[m] == kClosed) continue;
+        const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
+        const double lm = mobility(m);
+        if (state_[m] == kFilled) {
+          const double t = area * 2.0 * lc * lm / ((lc + lm) * dist); // harmonic mean mobility
+          diagonal += t;
+          inner[nnz] = unknown_[m];
+          value[nnz++] = -t;
+        } else {
+          // Ghost fluid: p_front at f of the way across the front voxel; half a voxel of this one's
+          // mobility in series with f of the front voxel's.
+          const double resistance = 0.5 * dist / lc + fill_[m] * dist / lm;
+          const double t = area / resistance;
+          diagonal += t;
+          b[row] += t * settings_.frontPressurePa;
+          links.push_back({c, m, t});
+        }
+      }
+      value[diagonalAt] = diagonal;
+      bool isSource = false;
+      if (filledSourcePore > 0)
+        isSource = std::binary_search(source_.begin(), source_.end(), c);
+      if (isSource) b[row] += flowRate * poreVolume(c) / filledSourcePore;
+    }
+    outer[unknowns] = nnz;
+    A.resizeNonZeros(nnz);
+  }
+  if (unknowns > 0 && links.empty())
+    throw FillingError("voxel Darcy: the pore space connected to the outlet is full at t = " + std::to_string(time_) +
+                       " s (no unfilled pore voxel borders the cement); enlarge roi_size_mm or inject less");
+  stats_.assemblySeconds += seconds(t0);
+
+  if (unknowns > 0) {
+    const auto ts = Clock::now();
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor, int>, Eigen::Lower | Eigen::Upper> cg;
+    cg.setTolerance(settings_.solverTolerance);
+    cg.setMaxIterations(settings_.maxSolverIterations);
+    cg.compute(A);
+    const Eigen::VectorXd p = cg.solveWithGuess(b, x);
+    ++stats_.solves;
+    stats_.iterations += std::size_t(cg.iterations());
+    stats_.worstResidual = std::max(stats_.worstResidual, double(cg.error()));
+    if (cg.info() != Eigen::Success) ++stats_.unconverged;
+    if (!p.allFinite())
+      throw FillingError("voxel Darcy: the pressure solve gave a non-finite value at t = " + std::to_string(time_) + " s");
+    for (std::size_t c = 0; c < n; ++c)
+      if (unknown_[c] >= 0) pressure_[c] = p[unknown_[c]];
+    stats_.solveSeconds += seconds(ts);
+  }
+  stats_.lastUnknowns = std::size_t(unknowns);
+
+  // Face fluxes of the solve (for velocities and shear rates), and the inflow of each front voxel.
+  std::fill(faceFlux_.begin(), faceFlux_.end(), 0.0f);
+  for (std::size_t c = 0; c < n; ++c) {
+    if (state_[c] != kFilled) continue;
+    const auto v = medium_.ijk(c);
+    for (int a = 0; a < 3; ++a) {
+      if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
+      const std::size_t m = c + std::size_t(stride[a]);
+      if (state_[m] != kFilled) continue;
+      const double lc = mobility(c), lm = mobility(m);
+      const double t = faceArea_[std::size_t(a)] * 2.0 * lc * lm / ((lc + lm) * faceDistance_[std::size_t(a)]);
+      faceFlux_[3 * c + std::size_t(a)] = float(t * (pressure_[c] - pressure_[m]));
+    }
+  }
+  std::vector<std::pair<std::size_t, double>> inflow; // front voxel, m^3/s
+  inflow.reserve(links.size());
+  for (const Link& l : links) {
+    const double q = std::max(0.0, l.t * (pressure_[l.from] - settings_.frontPressurePa));
+    inflow.push_back({l.to, q});
+    // Its face flux, signed along +axis.
+    const std::ptrdiff_t d = std::ptrdiff_t(l.to) - std::ptrdiff_t(l.from);
+    for (int a = 0; a < 3; ++a)
+      if (d == stride[a]) faceFlux_[3 * l.from + std::size_t(a)] = float(q);
+      else if (d == -stride[a]) faceFlux_[3 * l.to + std::size_t(a)] = float(-q);
+  }
+  if (unknowns == 0)
+    for (std::size_t c : source_)
+      if (state_[c] == kEmpty) inflow.push_back({c, flowRate * poreVolume(c) / openSourcePore});
+  std::sort(inflow.begin(), inflow.end());
+  std::size_t merged = 0; // one entry per front voxel
+  for (std::size_t i = 0; i < inflow.size(); ++i) {
+    if (merged > 0 && inflow[merged - 1].first == inflow[i].first) inflow[merged - 1].second += inflow[i].second;
+    else inflow[merged++] = inflow[i];
+  }
+  inflow.resize(merged);
+  stats_.lastFrontVoxels = merged;
+
+  // The step: no voxel overshoots full by more than maxFillPerStep of its pore volume.
+  double dt = dtMax;
+  for (const auto& [c, q] : inflow)
+    if (q > 0) dt = std::min(dt, std::max(1.0 - fill_[c], settings_.maxFillPerStep) * poreVolume(c) / q);
+  if (!(dt > 0) || !std::isfinite(dt)) throw FillingError("voxel Darcy: no admissible step at t = " + std::to_string(time_) + " s");
+  // The flux of the solve balances the source exactly (each row of the system is a voxel's balance), so the
+  // inflow adds up to the flow rate; the remainder (round-off, the solver's tolerance) is spread so that
+  // the cement volume stays the injected volume.
+  double inflowSum = 0;
+  for (const auto& e : inflow) inflowSum += e.second;
+  const double scale = inflowSum > 0 ? flowRate / inflowSum : 0.0;
+  std::vector<std::pair<std::size_t, double>> excess;
+  for (const auto& [c, q] : inflow) {
+    if (q <= 0) continue;
+    if (arrival_[c] < 0) arrival_[c] = time_;
+    fill_[c] += q * scale * dt / poreVolume(c);
+    if (fill_[c] > 1.0) excess.push_back({c, (fill_[c] - 1.0) * poreVolume(c)});
+    if (fill_[c] >= 1.0 - 1e-12) markFilled(c);
+  }
+  time_ += dt;
+  injected_ += flowRate * dt;
+  if (flowRate > 0 && inflowSum <= 0)
+    throw FillingError("voxel Darcy: the cement cannot enter the pore space at t = " + std::to_string(time_) + " s");
+  for (const auto& [c, e] : excess) depositExcess(c, e);
+  ++stats_.steps;
+  return dt;
+}
+
+} // namespace cementsph::voxeldarcy

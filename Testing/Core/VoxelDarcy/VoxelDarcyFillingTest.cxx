@@ -1,0 +1,164 @@
+// Oracles of the voxel-grid Darcy filling (VoxelDarcyFilling.h), each against an exact solution of
+// Darcy's law (issue "Physical cement"):
+//  * a point source in a uniform medium fills a ball, V = 4/3 pi phi R^3; the pressure outside the outlet
+//    is p(r) = mu Q / (4 pi k) (1/r - 1/R), and the mean over an outlet ball of radius a with a uniform
+//    source is p(a) + mu Q / (20 pi k a) (div q = s inside it), i.e. mu Q / (4 pi k) (1.2 / a - 1 / R);
+//  * on an impermeable plane the same source fills a hemisphere of radius 2^(1/3) R;
+//  * the pressure is proportional to the viscosity and the cement's shape does not depend on it;
+//  * the cement's volume is the injected volume at every step.
+#include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+namespace cementsph::voxeldarcy {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Ball {
+  double meanDistance = 0, cementVolume = 0, tipPressure = 0, sourceBallRadius = 0;
+};
+
+// Injects `volume` [m^3] at `flowRate` [m^3/s] from `tip`; checks the volume at every step.
+void inject(VoxelDarcyFilling& filling, double flowRate, double volume) {
+  const double T = volume / flowRate;
+  int steps = 0;
+  while (filling.time() < T * (1 - 1e-12)) {
+    filling.step(flowRate, std::min(T - filling.time(), 0.05 * T));
+    ASSERT_NEAR(filling.cementVolume(), filling.injectedVolume(), 1e-9 * volume) << "step " << steps;
+    ASSERT_LT(++steps, 100000);
+  }
+}
+
+double meanDistance(const VoxelDarcyFilling& filling, const Eigen::Vector3d& tip) {
+  const VoxelMedium& m = filling.medium();
+  double sum = 0, weight = 0;
+  for (std::size_t c = 0; c < m.count(); ++c) {
+    const double v = filling.fill()[c] * m.porosity[c];
+    if (v <= 0) continue;
+    sum += v * (m.centre(c) - tip).norm();
+    weight += v;
+  }
+  return sum / weight;
+}
+
+double sourceBallRadius(const VoxelDarcyFilling& filling) {
+  return std::cbrt(3.0 * double(filling.sourceVoxels().size()) * filling.medium().voxelVolume() / (4 * kPi));
+}
+
+// 0.5 mm voxels, 61^3, the tip at the centre voxel.
+VoxelMedium cube(double porosity, double permeability) {
+  const double h = 0.5e-3;
+  return VoxelMedium::uniform({61, 61, 61}, Eigen::Vector3d::Constant(-30 * h), Eigen::Vector3d::Constant(h), porosity,
+                              permeability);
+}
+
+const double kMu = 100.0, kQ = 5e-8, kK = 1e-9, kVolume = 1e-6; // Pa s, m^3/s (0.05 ml/s), m^2, 1 ml
+
+class Sphere : public ::testing::TestWithParam<double> {};
+
+TEST_P(Sphere, FillsTheBallOfItsPorosityWithDarcysPressure) {
+  const double phi = GetParam();
+  VoxelDarcyFilling filling(cube(phi, kK));
+  const Eigen::Vector3d tip = Eigen::Vector3d::Zero();
+  filling.setSource(tip, 1.5e-3); // 3 voxels
+  filling.setViscosity(kMu);
+  inject(filling, kQ, kVolume);
+  const double R = std::cbrt(3 * kVolume / (4 * kPi * phi));
+  // Mean distance of a ball's volume from its centre: 3R/4; within 3 % (the issue's tolerance).
+  const double d = meanDistance(filling, tip);
+  std::printf("phi %.2f: mean distance %.4f mm against %.4f mm; %zu steps, %zu CG iterations\n", phi, d * 1e3,
+              0.75 * R * 1e3, filling.statistics().steps, filling.statistics().iterations);
+  EXPECT_NEAR(d / (0.75 * R), 1.0, 0.03) << "mean distance " << d * 1e3 << " mm, ball " << 0.75 * R * 1e3 << " mm";
+  // Tip pressure: the mean over the outlet ball (radius a of the same volume as its voxels), within 10 %.
+  const double a = sourceBallRadius(filling);
+  const double expected = kMu * kQ / (4 * kPi * kK) * (1.2 / a - 1 / R);
+  std::printf("phi %.2f: tip %.1f Pa against Darcy %.1f Pa (a %.4f mm)\n", phi, filling.sourcePressure(), expected,
+              a * 1e3);
+  EXPECT_NEAR(filling.sourcePressure() / expected, 1.0, 0.10)
+      << "tip " << filling.sourcePressure() << " Pa, Darcy " << expected << " Pa (a " << a * 1e3 << " mm)";
+  // The profile between the outlet and the front: shells of filled voxels, within 5 %.
+  const VoxelMedium& m = filling.medium();
+  for (double r : {0.3 * R, 0.5 * R, 0.7 * R}) {
+    double sum = 0;
+    int count = 0;
+    for (std::size_t c = 0; c < m.count(); ++c) {
+      const double rc = (m.centre(c) - tip).norm();
+      if (filling.filled(c) && std::abs(rc - r) < 0.25e-3) {
+        sum += filling.pressure()[c] - kMu * kQ / (4 * kPi * kK) * (1 / rc - 1 / r); // moved to radius r
+        ++count;
+      }
+    }
+    ASSERT_GT(count, 10);
+    const double profile = kMu * kQ / (4 * kPi * kK) * (1 / r - 1 / R);
+    std::printf("phi %.2f: p(%.3f mm) %.1f Pa against %.1f Pa\n", phi, r * 1e3, sum / count, profile);
+    EXPECT_NEAR(sum / count / profile, 1.0, 0.05) << "at r = " << r * 1e3 << " mm";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Porosities, Sphere, ::testing::Values(1.0, 0.5));
+
+TEST(VoxelDarcyFilling, AnImpermeablePlaneMakesAHemisphereOfTwoToTheThirdTheRadius) {
+  VoxelMedium m = cube(1.0, kK);
+  // Solid below the plane z = -0.25 mm (voxels k <= 29); the outlet on the plane.
+  for (std::size_t c = 0; c < m.count(); ++c)
+    if (m.ijk(c)[2] <= 29) m.porosity[c] = 0.0f;
+  VoxelDarcyFilling filling(m);
+  const Eigen::Vector3d tip(0, 0, -0.25e-3);
+  filling.setSource(tip + Eigen::Vector3d(0, 0, 1e-6), 1.5e-3); // just above the plane: the first pore layer
+  filling.setViscosity(kMu);
+  inject(filling, kQ, 0.5e-6);
+  const double Rfree = std::cbrt(3 * 0.5e-6 / (4 * kPi));
+  const double d = meanDistance(filling, tip);
+  std::printf("hemisphere: mean distance %.4f mm, 2^(1/3) x the free ball's %.4f mm\n", d * 1e3,
+              0.75 * std::cbrt(2.0) * Rfree * 1e3);
+  EXPECT_NEAR(d / (0.75 * std::cbrt(2.0) * Rfree), 1.0, 0.03);
+}
+
+// A heterogeneous medium (k log-uniform over two decades, 10 % solid voxels): viscosity 400 against 100 Pa s.
+TEST(VoxelDarcyFilling, PressureIsProportionalToViscosityAndTheShapeDoesNotChange) {
+  VoxelMedium m = cube(0.8, kK);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (std::size_t c = 0; c < m.count(); ++c) {
+    m.permeability[c] = kK * std::pow(10.0, 2 * u(rng) - 1);
+    if (u(rng) < 0.1 && m.ijk(c) != std::array<int, 3>{30, 30, 30}) m.porosity[c] = 0.0f;
+  }
+  auto run = [&](double mu) {
+    VoxelDarcyFilling f(m);
+    f.setSource(Eigen::Vector3d::Zero(), 1.0e-3);
+    f.setViscosity(mu);
+    inject(f, kQ, 0.3e-6);
+    return f;
+  };
+  const VoxelDarcyFilling low = run(100.0), high = run(400.0);
+  EXPECT_NEAR(high.sourcePressure() / low.sourcePressure(), 4.0, 4.0 * 1e-6);
+  double worst = 0;
+  for (std::size_t c = 0; c < m.count(); ++c) worst = std::max(worst, std::abs(high.fill()[c] - low.fill()[c]));
+  EXPECT_LT(worst, 1e-6);
+}
+
+TEST(VoxelDarcyFilling, ACementThatCannotGoOnIsAClearError) {
+  // A closed box of 27 pore voxels cannot take 1 ml.
+  VoxelMedium m = VoxelMedium::uniform({5, 5, 5}, Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(1e-3), 1.0, kK);
+  for (std::size_t c = 0; c < m.count(); ++c) {
+    const auto v = m.ijk(c);
+    if (v[0] == 0 || v[1] == 0 || v[2] == 0 || v[0] == 4 || v[1] == 4 || v[2] == 4) m.porosity[c] = 0.0f;
+  }
+  VoxelDarcyFilling filling(m);
+  filling.setSource(Eigen::Vector3d::Constant(2e-3), 0.5e-3);
+  filling.setViscosity(kMu);
+  EXPECT_THROW(
+      {
+        for (int i = 0; i < 10000; ++i) filling.step(kQ, 1.0);
+      },
+      FillingError);
+  EXPECT_THROW(filling.setSource(Eigen::Vector3d::Zero(), 1e-3), std::invalid_argument); // a solid voxel
+}
+
+} // namespace
+} // namespace cementsph::voxeldarcy
