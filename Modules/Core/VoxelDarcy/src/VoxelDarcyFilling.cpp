@@ -269,7 +269,12 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
 
   if (unknowns > 0) {
     const auto ts = Clock::now();
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor, int>, Eigen::Lower | Eigen::Upper> cg;
+    using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+#ifdef CEMENTSPH_VOXEL_DARCY_IC
+    Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::NaturalOrdering<int>>> cg;
+#else
+    Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper> cg;
+#endif
     cg.setTolerance(settings_.solverTolerance);
     cg.setMaxIterations(settings_.maxSolverIterations);
     cg.compute(A);

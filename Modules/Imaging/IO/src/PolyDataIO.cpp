@@ -17,7 +17,8 @@ void writePolyData(vtkPolyData* surface, const std::string& path) {
     writer->SetFileName(tmp.c_str());
     writer->SetInputData(surface);
     writer->SetDataModeToAppended();
-    writer->SetCompressorTypeToZLib();
+    // LZ4: 4-5x faster than zlib for a few per cent more bytes (a 5 ml run writes a hundred snapshots).
+    writer->SetCompressorTypeToLZ4();
     // VTK reports a full disk through the error code only (Write() still returns 1).
     if (writer->Write() != 1 || writer->GetErrorCode() != 0)
       throw std::runtime_error("VTK could not write the surface (disk full or over the file size limit?)");

@@ -1,5 +1,8 @@
 #include "cementsph/scene/InjectionRunner.h"
 
+#include "InjectionOutputs.h"
+#include "VoxelDarcyInjection.h"
+
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
@@ -120,9 +123,11 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const double roiVoxels = double(solid.roiSize[0]) * double(solid.roiSize[1]) * double(solid.roiSize[2]);
   const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
   const ModelChoice choice = chooseModel(scene, m.restDensity, m.soundSpeed, roiPorosity);
+  if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
+  if (choice.pressureModel == "voxel-darcy")
+    return detail::runVoxelDarcyInjection(ct, scene, o, {preset, m, solid, choice, wallStart});
   m.pressureModel = choice.pressureModel;
   const bool incompressible = m.pressureModel == "incompressible";
-  if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
 
   sph::CannulaSpec spec;
   spec.tip = tip;
@@ -154,8 +159,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const double cannulaLength = scene.cannulaLengthMm * 1e-3;
   // Pressure at the outlet [Pa]: incompressible, the mean pressure of the cement the source feeds (the
   // pressure the cannula works against: power = Q p); equation of state, the paper's probe (Eq. 6 ring).
-  struct TipRecord { double time, tipPa, cannulaPa; };
-  std::vector<TipRecord> tipSeries;
+  std::vector<detail::TipRecord> tipSeries;
   auto outletPressure = [&]() {
     if (!incompressible) return probe.sample(sim).meanPressure;
     const sph::FluidParticles& f = sim.fluid();
@@ -371,19 +375,12 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   result.simulatedCt = simCt;
   if (writing) {
     writeSnapshot(simCt);
-    std::ostringstream pvd;
-    pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
-    for (const auto& [t, name] : snapshots)
-      pvd << "    <DataSet timestep=\"" << std::setprecision(10) << t << "\" part=\"0\" file=\"" << name << "\"/>\n";
-    pvd << "  </Collection>\n</VTKFile>\n";
-    imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), pvd.str());
-    std::ostringstream csv;
-    csv << "time_s,pressure_pa,pressure_minus_baseline_pa,cannula_pressure_drop_pa,injection_pressure_pa\n"
-        << std::setprecision(10);
-    for (const auto& s : tipSeries)
-      csv << s.time << "," << s.tipPa << "," << (incompressible ? s.tipPa : haveBaseline ? s.tipPa - baseline : 0.0)
-          << "," << s.cannulaPa << "," << s.tipPa + s.cannulaPa << "\n";
-    imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(), csv.str());
+    imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), detail::particleCollection(snapshots));
+    std::optional<double> csvBaseline;
+    if (incompressible) csvBaseline = 0.0;
+    else if (haveBaseline) csvBaseline = baseline;
+    imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(),
+                                 detail::tipPressureCsv(tipSeries, csvBaseline));
     imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
     imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");
     metrics["snapshots"] = snapshots.size();

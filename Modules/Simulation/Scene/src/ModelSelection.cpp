@@ -64,18 +64,17 @@ ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed
     c.pressureModel = "equation-of-state";
     c.reason = "inertia is not negligible (" + numbers + "): the creeping-flow models do not apply; use the paper preset's central-difference integrator";
   } else if (n.compression > 0.01) {
-    // The incompressible model is what this regime needs, but it does not meet its oracles yet
-    // (VALIDATION.md, "Incompressible Darcy model"): it runs only when the scene asks for it.
-    c.recommended = "incompressible";
-    c.pressureModel = "equation-of-state";
-    c.reason = "creeping flow (" + numbers + "): the equation of state compresses the cement at the Darcy pressure, so its pressure is the model's, not physical; the incompressible Darcy model this regime needs is experimental (pressure_model \"incompressible\" runs it; VALIDATION.md)";
+    c.pressureModel = "voxel-darcy";
+    c.reason = "creeping flow (" + numbers + "): the equation of state would compress the cement at the Darcy pressure, so the cement is incompressible and its pressure is solved by Darcy's law on the CT's voxels (pressure in gauge Pa)";
   } else {
     c.pressureModel = "equation-of-state";
     c.reason = "creeping flow with compression below 1 % (" + numbers + "): the paper's weakly compressible model is accurate";
   }
   c.reason += caveats;
   if (c.recommended.empty()) c.recommended = c.pressureModel;
-  c.model = c.pressureModel == "incompressible" ? "incompressible-darcy" : "weakly-compressible";
+  c.model = c.pressureModel == "voxel-darcy"      ? "incompressible-darcy-on-voxels"
+            : c.pressureModel == "incompressible" ? "incompressible-darcy-on-particles"
+                                                  : "weakly-compressible";
   return c;
 }
 

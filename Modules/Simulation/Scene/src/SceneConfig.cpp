@@ -120,10 +120,13 @@ void applySceneJson(SceneConfig& s, const json& j) {
     else if (key == "neighbour_skin_over_h") s.neighbourSkinOverH = number(v, key);
     else if (key == "pressure_model") {
       s.pressureModel = text(v, key);
-      if (s.pressureModel != "auto" && s.pressureModel != "incompressible" && s.pressureModel != "equation-of-state")
-        fail(key, "must be \"auto\", \"incompressible\" or \"equation-of-state\" (got \"" + s.pressureModel + "\")");
-    }
-    else
+      if (s.pressureModel != "auto" && s.pressureModel != "voxel-darcy" && s.pressureModel != "incompressible" &&
+          s.pressureModel != "equation-of-state")
+        fail(key, "must be \"auto\", \"voxel-darcy\", \"incompressible\" or \"equation-of-state\" (got \"" +
+                      s.pressureModel + "\")");
+    } else if (key == "pore_permeability_m2") {
+      s.porePermeabilityM2 = number(v, key);
+    } else
       throw std::invalid_argument("scene: unknown key '" + key + "'");
   }
 }
@@ -168,6 +171,7 @@ void SceneConfig::validate() const {
   if (roiSizeMm < 4 * spacingM() * 1e3) fail("roi_size_mm", "must be at least 4 particle diameters");
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
   requirePositive(solidMassFactor, "solid_mass_factor");
+  if (porePermeabilityM2) requirePositive(*porePermeabilityM2, "pore_permeability_m2");
   if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
   if (soundSpeedMPerS) requirePositive(*soundSpeedMPerS, "sound_speed_m_per_s");
   auto requireFraction = [](const std::optional<double>& x, double upper, const char* key) {
@@ -248,6 +252,7 @@ json toJson(const SceneConfig& s) {
   if (s.maxDisplacementOverH) j["max_displacement_over_h"] = *s.maxDisplacementOverH;
   if (s.neighbourSkinOverH) j["neighbour_skin_over_h"] = *s.neighbourSkinOverH;
   j["pressure_model"] = s.pressureModel;
+  if (s.porePermeabilityM2) j["pore_permeability_m2"] = *s.porePermeabilityM2;
   return j;
 }
 

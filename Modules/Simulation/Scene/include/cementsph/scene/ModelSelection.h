@@ -15,8 +15,10 @@
 //                  final front (hemisphere of the injected volume)
 //   viscosity ratio M = mu / mu_marrow (marrow 0.1 Pa.s; 0.044-0.142 Pa.s, Zhong & Akkus 2011)
 // Rule: the paper preset keeps its model. Otherwise, if Re and St are both below 0.1 the flow is creeping,
-// and if C exceeds 0.01 the equation of state would compress the cement by more than 1 %: incompressible
-// Darcy pressure is recommended (it runs when pressure_model says so: it is experimental, VALIDATION.md). If C <= 0.01 the paper's equation of state is accurate and is kept. If Re or St >= 0.1
+// and if C exceeds 0.01 the equation of state would compress the cement by more than 1 %: the incompressible
+// Darcy filling on the voxel grid runs (voxel-darcy; it meets the oracles, VALIDATION.md; the particles'
+// Poisson equation, "incompressible", does not yet and runs only when asked for). If C <= 0.01 the paper's
+// equation of state is accurate and is kept. If Re or St >= 0.1
 // inertia matters, which the overdamped models neglect: equation of state (use the paper preset's
 // central-difference integrator). M >> 1 and N << 1 justify a single-phase model without capillarity; the
 // reason says when they do not hold.
@@ -37,8 +39,9 @@ struct DimensionlessNumbers {
 };
 
 struct ModelChoice {
-  std::string pressureModel; // registered name: "incompressible" or "equation-of-state"
-  std::string model;         // what metrics.json calls it: "incompressible-darcy" or "weakly-compressible"
+  std::string pressureModel; // "voxel-darcy", "incompressible" or "equation-of-state"
+  std::string model;         // what metrics.json calls it: "incompressible-darcy-on-voxels",
+                             // "incompressible-darcy-on-particles" or "weakly-compressible"
   std::string reason;        // one sentence
   std::string recommended;   // the pressure model the numbers call for
   DimensionlessNumbers numbers;

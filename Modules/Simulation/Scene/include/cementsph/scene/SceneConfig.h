@@ -31,8 +31,12 @@
 //   fixed_field_spacing_over_h      tabulated: grid spacing / h (0..1]                      0.25
 //   max_displacement_over_h         overdamped: largest move per step / h (0..1]           0.25
 //   neighbour_skin_over_h           Verlet skin / h (0..2]                                 model preset
-//   pressure_model "auto"|"incompressible"|"equation-of-state"   the pressure model; auto chooses from the
-//                                   scene's dimensionless numbers (ModelSelection.h)        auto
+//   pressure_model "auto"|"voxel-darcy"|"incompressible"|"equation-of-state"   the pressure model: voxel-darcy
+//                                   the incompressible Darcy filling on the CT's voxels (VoxelDarcyFilling.h),
+//                                   incompressible the particles' Poisson equation (IncompressibleDarcy.h),
+//                                   equation-of-state the paper's Eq. 6; auto chooses from the scene's
+//                                   dimensionless numbers (ModelSelection.h)                 auto
+//   pore_permeability_m2            voxel-darcy: permeability of a resolved pore voxel   preset drag k0 = h^5/(Cf d^3)
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
 #pragma once
@@ -75,6 +79,7 @@ struct SceneConfig {
   std::optional<std::string> fixedParticleSums;
   std::optional<double> fixedFieldSpacingOverH, maxDisplacementOverH, neighbourSkinOverH;
   std::string pressureModel = "auto";
+  std::optional<double> porePermeabilityM2; // voxel-darcy: permeability of a resolved pore voxel [m^2]
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }

@@ -1,0 +1,341 @@
+#include "VoxelDarcyInjection.h"
+
+#include "InjectionOutputs.h"
+
+#include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/PolyDataIO.h"
+#include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/SimulatedCT.h"
+#include "cementsph/sph/HagenPoiseuille.h"
+#include "cementsph/sph/Simulation.h"
+#include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
+
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace cementsph::scene::detail {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using voxeldarcy::VoxelDarcyFilling;
+using voxeldarcy::VoxelMedium;
+
+namespace {
+
+// The cannula's wall thickness [m] where the scene gives none: 11G regular wall, outer 3.048 mm against
+// inner 2.388 mm (ISO 9626).
+constexpr double kCannulaWallM = 0.33e-3;
+
+std::string fmt(double x, int precision = 4) {
+  std::ostringstream s;
+  s << std::setprecision(precision) << x;
+  return s.str();
+}
+
+// One point per voxel holding cement.
+vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f) {
+  const VoxelMedium& m = f.medium();
+  std::vector<std::size_t> cells;
+  for (std::size_t c = 0; c < m.count(); ++c)
+    if (f.fill()[c] > 0) cells.push_back(c);
+  const vtkIdType n = vtkIdType(cells.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  auto make = [n](const char* name, int components) {
+    auto a = vtkSmartPointer<vtkDoubleArray>::New();
+    a->SetName(name);
+    a->SetNumberOfComponents(components);
+    a->SetNumberOfTuples(n);
+    return a;
+  };
+  auto fill = make("fill_fraction", 1), volume = make("cement_volume_mm3", 1), pressure = make("pressure_pa", 1),
+       velocity = make("darcy_velocity_m_per_s", 3), viscosity = make("viscosity_pa_s", 1),
+       porosity = make("porosity", 1), permeability = make("permeability_m2", 1), arrival = make("arrival_time_s", 1),
+       age = make("age_s", 1);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  for (vtkIdType i = 0; i < n; ++i) {
+    const std::size_t c = cells[std::size_t(i)];
+    const Eigen::Vector3d x = m.centre(c) * 1e3;
+    points->SetPoint(i, x.x(), x.y(), x.z());
+    fill->SetValue(i, f.fill()[c]);
+    volume->SetValue(i, f.fill()[c] * m.porosity[c] * m.voxelVolume() * 1e9);
+    pressure->SetValue(i, f.pressure()[c]);
+    const Eigen::Vector3d q = f.darcyVelocity(c);
+    velocity->SetTuple3(i, q.x(), q.y(), q.z());
+    viscosity->SetValue(i, f.viscosity()[c]);
+    porosity->SetValue(i, m.porosity[c]);
+    permeability->SetValue(i, m.permeability[c]);
+    arrival->SetValue(i, f.arrivalTime()[c]);
+    age->SetValue(i, f.time() - f.arrivalTime()[c]);
+    verts->InsertNextCell(1, &i);
+  }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  for (auto* a : {fill.Get(), volume.Get(), pressure.Get(), velocity.Get(), viscosity.Get(), porosity.Get(),
+                  permeability.Get(), arrival.Get(), age.Get()})
+    poly->GetPointData()->AddArray(a);
+  return poly;
+}
+
+} // namespace
+
+InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const SceneConfig& scene,
+                                          const InjectionRunOptions& o, const VoxelDarcyRunInputs& in) {
+  const PorousSolid& solid = in.solid;
+  const sph::ModelParameters& model = in.model;
+  const double rho0 = model.restDensity;
+  const Eigen::Vector3d tip = *scene.tipMm * 1e-3;
+  const Eigen::Vector3d axis = scene.direction.normalized();
+  const double innerDiameter = scene.cannulaInnerDiameterMm * 1e-3, cannulaLength = scene.cannulaLengthMm * 1e-3;
+  const double flowRate = scene.flowRateM3PerS();
+
+  // The medium: the CT's pore voxels open, its solid voxels closed. A resolved pore voxel has the
+  // permeability of the model preset's drag in open space, k0 = h^5 / (Cf d^3) (model-notes 3: the
+  // paper's Eq. 9 resistance with no solid near), unless the scene gives pore_permeability_m2.
+  const double d = scene.spacingM(), h = model.smoothingLength;
+  const double poreK = scene.porePermeabilityM2.value_or(std::pow(h, 5) / (model.dragCoefficient * d * d * d));
+  VoxelMedium medium;
+  medium.size = solid.grid.size;
+  medium.origin = solid.grid.origin;
+  medium.spacing = solid.grid.spacing;
+  medium.porosity.assign(medium.count(), 1.0f);
+  medium.permeability.assign(medium.count(), poreK);
+  for (std::size_t c = 0; c < medium.count(); ++c)
+    if (solid.solid[c]) medium.porosity[c] = 0.0f;
+  // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it).
+  std::size_t shaftVoxels = 0;
+  if (scene.cannulaWall) {
+    const double outer = 0.5 * innerDiameter + kCannulaWallM;
+    for (std::size_t c = 0; c < medium.count(); ++c) {
+      const Eigen::Vector3d r = medium.centre(c) - tip;
+      const double s = r.dot(axis);
+      if (s < 0 && s >= -cannulaLength && (r - s * axis).norm() <= outer && medium.porosity[c] > 0) {
+        medium.porosity[c] = 0.0f;
+        ++shaftVoxels;
+      }
+    }
+  }
+  const double sourceRadius = std::max(0.5 * innerDiameter, 0.5 * solid.grid.spacing.minCoeff());
+
+  VoxelDarcyFilling filling(std::move(medium));
+  filling.setSource(tip, sourceRadius);
+  const sph::ViscositySchedule viscosity = scene.viscositySchedule();
+
+  std::vector<TipRecord> tipSeries;
+  json volumeHistory = json::array();
+  auto volumeRecord = [&]() {
+    return json{{"time_s", filling.time()}, {"volume_injected_ml", filling.injectedVolume() * 1e6},
+                {"cement_volume_ml", filling.cementVolume() * 1e6}};
+  };
+  auto cementDensity = [&]() { // kg/m^3 of cement per ROI voxel (its filled pore fraction at rho0)
+    std::vector<double> rho(filling.medium().count(), 0.0);
+    for (std::size_t c = 0; c < rho.size(); ++c) rho[c] = filling.fill()[c] * filling.medium().porosity[c] * rho0;
+    return rho;
+  };
+
+  const bool writing = !o.outDir.empty();
+  if (writing) fs::create_directories(o.outDir);
+  if (writing)
+    imaging::removeStaleOutputs(o.outDir, {"particles_####.vtp", "simulated_ct_####.nrrd", "simulated_ct_start.nrrd",
+                                           "sequence.json"});
+  const bool ctSnapshots = writing && scene.simulatedCtSnapshots;
+  json ctFrames = json::array();
+  double ctSnapshotWallS = 0.0;
+  auto writeCtSnapshot = [&](const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now) {
+    const auto t0 = std::chrono::steady_clock::now();
+    imaging::ImageType::Pointer made;
+    if (!now) made = simulatedCtOnRoi(ct, solid, cementDensity(), o.huPerRelativeDensity, rho0);
+    imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(o.outDir) / ctName).string());
+    ctSnapshotWallS += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ctFrames.push_back({{"index", ctFrames.size()}, {"time_s", filling.time()}, {"simulated_ct", ctName},
+                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
+  };
+  if (ctSnapshots) writeCtSnapshot("simulated_ct_start.nrrd", "", nullptr);
+  std::vector<std::pair<double, std::string>> snapshots;
+  auto writeSnapshot = [&](const imaging::ImageType* ctNow = nullptr) {
+    volumeHistory.push_back(volumeRecord());
+    if (!writing) return;
+    char name[64];
+    std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
+    imaging::writePolyData(cementVoxelsToPolyData(filling), (fs::path(o.outDir) / name).string());
+    if (ctSnapshots) {
+      char ctName[64];
+      std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots.size());
+      writeCtSnapshot(ctName, name, ctNow);
+    }
+    snapshots.emplace_back(filling.time(), name);
+  };
+
+  const double T = scene.injectionDurationS();
+  const double endTime = T * (1 - 1e-12);
+  const bool tty = o.progress && isatty(STDERR_FILENO);
+  double nextSnapshot = scene.snapshotIntervalS, nextReport = 0.0, nextFraction = 0.0;
+  bool stopped = false;
+  try {
+    while (filling.time() < endTime) {
+      const double mu = viscosity.at(filling.time());
+      filling.setViscosity(mu);
+      double dtMax = T - filling.time();
+      if (nextSnapshot - filling.time() > 1e-9 * T) dtMax = std::min(dtMax, nextSnapshot - filling.time());
+      filling.step(flowRate, dtMax);
+      tipSeries.push_back({filling.time(), filling.sourcePressure(),
+                           sph::hagenPoiseuillePressureDrop(mu, cannulaLength, flowRate, innerDiameter)});
+      if (filling.time() >= nextSnapshot * (1 - 1e-12) && filling.time() < endTime) {
+        writeSnapshot();
+        while (nextSnapshot <= filling.time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
+      }
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - in.wallStart).count();
+      const double fraction = std::min(1.0, filling.time() / T);
+      if (o.progress && wall >= nextReport) {
+        std::ostringstream line;
+        line << "inject: t " << fmt(filling.time()) << " / " << fmt(T) << " s, " << filling.statistics().lastUnknowns
+             << " filled voxels, " << filling.statistics().steps << " steps";
+        if (tty && fraction > 0) line << ", ETA " << fmt(wall * (1 - fraction) / fraction, 3) << " s";
+        if (tty) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
+        else std::cerr << line.str() << "\n";
+        nextReport = wall + (tty ? 1.0 : 30.0);
+      }
+      if (o.onProgress && fraction >= nextFraction) {
+        nextFraction = fraction + 0.01;
+        if (!o.onProgress(fraction)) {
+          stopped = true;
+          break;
+        }
+      }
+    }
+  } catch (const voxeldarcy::FillingError& e) {
+    throw sph::SimulationError(e.what()); // a failed run, as an unstable particle run
+  }
+  if (tty) std::cerr << "\n";
+  const double wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - in.wallStart).count();
+
+  // Figures.
+  const VoxelMedium& m = filling.medium();
+  double spread = 0, held = 0;
+  std::size_t cementVoxels = 0;
+  for (std::size_t c = 0; c < m.count(); ++c) {
+    const double v = filling.fill()[c] * m.porosity[c];
+    if (v <= 0) continue;
+    ++cementVoxels;
+    spread += v * (m.centre(c) - tip).norm();
+    held += v;
+  }
+  if (held > 0) spread /= held;
+  double finalPressure = 0, maxPressure = 0, maxInjection = 0, finalCannula = 0;
+  for (const auto& s : tipSeries) {
+    maxPressure = std::max(maxPressure, s.tipPa);
+    maxInjection = std::max(maxInjection, s.tipPa + s.cannulaPa);
+  }
+  if (!tipSeries.empty()) {
+    finalPressure = tipSeries.back().tipPa;
+    finalCannula = tipSeries.back().cannulaPa;
+  }
+  const auto simCt = simulatedCtOnRoi(ct, solid, cementDensity(), o.huPerRelativeDensity, rho0);
+  std::size_t sourceVoxels = filling.sourceVoxels().size();
+  double porosityAtTip = 0, permeabilityAtTip = 0;
+  for (std::size_t c : filling.sourceVoxels()) {
+    porosityAtTip += m.porosity[c] / double(sourceVoxels);
+    permeabilityAtTip += m.permeability[c] / double(sourceVoxels);
+  }
+
+  const auto& st = filling.statistics();
+  json metrics;
+  metrics["volume_injected_ml"] = filling.injectedVolume() * 1e6;
+  metrics["volume_requested_ml"] = scene.volumeMl;
+  metrics["simulated_time_s"] = filling.time();
+  metrics["stopped_early"] = stopped;
+  metrics["fluid_particles"] = cementVoxels; // the points of particles_NNNN.vtp: one per voxel holding cement
+  metrics["cement_voxels"] = cementVoxels;
+  metrics["fixed_particles"] = 0;
+  metrics["cannula_wall_particles"] = 0;
+  metrics["cannula_shaft_voxels_closed"] = shaftVoxels;
+  metrics["solid_voxels_kept"] = solid.solidVoxels;
+  metrics["solid_voxels_total"] = solid.solidVoxels;
+  metrics["connected_pore_voxels"] = solid.connectedPoreVoxels;
+  metrics["roi_voxels"] = {solid.roiSize[0], solid.roiSize[1], solid.roiSize[2]};
+  metrics["roi_start_index"] = {solid.roiStart[0], solid.roiStart[1], solid.roiStart[2]};
+  metrics["steps"] = st.steps;
+  metrics["wall_time_s"] = wallS;
+  metrics["real_time_factor"] = wallS > 0 ? filling.time() / wallS : 0.0;
+  metrics["model_preset"] = in.preset.name;
+  metrics["model"] = in.choice.model;
+  metrics["model_reason"] = in.choice.reason;
+  metrics["recommended_pressure_model"] = in.choice.recommended;
+  metrics["pressure_model"] = "voxel-darcy";
+  metrics["resistance"] = scene.porePermeabilityM2 ? "pore-permeability (scene)" : "pore-permeability (preset drag k0)";
+  metrics["viscosity_law"] = "newtonian";
+  metrics["dimensionless_numbers"] = in.choice.numbersJson();
+  metrics["pressure_is_physical"] = true;
+  metrics["pore_permeability_m2"] = poreK;
+  metrics["porosity_at_tip"] = porosityAtTip;
+  metrics["permeability_at_tip_m2"] = permeabilityAtTip;
+  metrics["cannula_pressure_drop_pa"] = finalCannula;
+  metrics["injection_pressure_pa"] = finalPressure + finalCannula;
+  metrics["max_injection_pressure_pa"] = maxInjection;
+  metrics["cement_volume_ml"] = filling.cementVolume() * 1e6;
+  {
+    json history = volumeHistory;
+    history.push_back(volumeRecord());
+    metrics["volume_history"] = history;
+  }
+  metrics["pressure_solves"] = st.solves;
+  metrics["pressure_solver_iterations_mean"] = st.solves ? double(st.iterations) / double(st.solves) : 0.0;
+  metrics["pressure_solver_worst_residual"] = st.worstResidual;
+  metrics["pressure_solver_unconverged"] = st.unconverged;
+  metrics["pressure_solve_wall_s"] = st.solveSeconds;
+  metrics["pressure_assembly_wall_s"] = st.assemblySeconds;
+  metrics["front_voxels"] = st.lastFrontVoxels;
+  metrics["outlet_source_radius_mm"] = sourceRadius * 1e3;
+  metrics["outlet_source_voxels"] = sourceVoxels;
+  metrics["final_tip_pressure_pa"] = finalPressure;
+  metrics["max_tip_pressure_pa"] = maxPressure;
+  metrics["tip_pressure_baseline_pa"] = 0.0;
+  metrics["mean_spreading_distance_mm"] = spread * 1e3;
+  metrics["escaped_particles"] = 0;
+  metrics["mass_balance_error"] = filling.injectedVolume() > 0
+                                      ? (filling.injectedVolume() - filling.cementVolume()) / filling.injectedVolume()
+                                      : 0.0;
+  metrics["fluid_in_solid_fraction"] = 0.0; // closed voxels never take cement
+  metrics["simulated_ct_hu_per_relative_density"] = o.huPerRelativeDensity;
+  metrics["final_viscosity_pa_s"] = viscosity.at(filling.time());
+
+  InjectionRunResult result;
+  result.particles = cementVoxelsToPolyData(filling);
+  result.simulatedCt = simCt;
+  if (writing) {
+    writeSnapshot(simCt);
+    imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), particleCollection(snapshots));
+    imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(), tipPressureCsv(tipSeries, 0.0));
+    imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
+    imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");
+    metrics["snapshots"] = snapshots.size();
+    if (ctSnapshots) {
+      metrics["simulated_ct_snapshots"] = ctFrames.size();
+      metrics["simulated_ct_snapshots_wall_s"] = ctSnapshotWallS;
+      const json sequence{{"frames", ctFrames},
+                          {"final_simulated_ct", "simulated_ct.nrrd"},
+                          {"simulated_ct_hu_per_relative_density", o.huPerRelativeDensity},
+                          {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the "
+                                   "last frame is simulated_ct.nrrd"}};
+      imaging::writeTextAtomically((fs::path(o.outDir) / "sequence.json").string(), sequence.dump(2) + "\n");
+    }
+    imaging::writeTextAtomically((fs::path(o.outDir) / "metrics.json").string(), metrics.dump(2) + "\n");
+  }
+  result.metrics = metrics;
+  return result;
+}
+
+} // namespace cementsph::scene::detail

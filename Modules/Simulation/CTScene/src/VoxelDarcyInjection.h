@@ -1,0 +1,29 @@
+// The inject runner's path for the voxel-grid Darcy filling (pressure_model "voxel-darcy", the default for
+// creeping flow; VoxelDarcyFilling.h): same files and metrics as the particle path (InjectionRunner.h), with
+// the cement as filled voxels. particles_NNNN.vtp then holds one point per voxel that holds cement (its
+// centre, mm, the CT's frame) with fill_fraction, cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s,
+// viscosity_pa_s, porosity, permeability_m2, arrival_time_s and age_s.
+#pragma once
+
+#include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/scene/InjectionRunner.h"
+#include "cementsph/scene/ModelSelection.h"
+#include "cementsph/scene/PorousSolid.h"
+#include "cementsph/sph/Presets.h"
+
+#include <chrono>
+
+namespace cementsph::scene::detail {
+
+struct VoxelDarcyRunInputs {
+  const sph::ModelPreset& preset;
+  const sph::ModelParameters& model; // h, Cf, rho0 of the preset with the scene's overrides
+  const PorousSolid& solid;
+  const ModelChoice& choice;
+  std::chrono::steady_clock::time_point wallStart;
+};
+
+InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const SceneConfig& scene,
+                                          const InjectionRunOptions& options, const VoxelDarcyRunInputs& inputs);
+
+} // namespace cementsph::scene::detail
