@@ -39,7 +39,7 @@ fs::path scratch(const std::string& name) {
   std::ofstream(p / "scene.json") << R"({"tip_mm": [13, 13, 13], "volume_ml": 0.1, "cannula_length_mm": 5,
     "preset": "default", "integrator": "overdamped", "drag_coefficient": 8.7, "sound_speed_m_per_s": 1.0,
     "fixed_particle_sums": "tabulated", "fixed_field_spacing_over_h": 0.25, "max_displacement_over_h": 0.25,
-    "neighbour_skin_over_h": 0.2})";
+    "neighbour_skin_over_h": 0.2, "pressure_model": "equation-of-state"})";
   return p;
 }
 

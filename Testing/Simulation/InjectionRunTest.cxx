@@ -40,7 +40,9 @@ TEST(InjectionRun, ShortInjectionIntoAScaffold) {
   // docs/scene-figures.md was taken this way); unset in ctest.
   if (const char* e = std::getenv("SCENE_OVERRIDE")) overrides.push_back(e);
   const SceneConfig scene = sceneFromJson(
-      {{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.2}, {"snapshot_interval_s", 1.0}, {"cannula_length_mm", 5}}, overrides);
+      {{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.2}, {"snapshot_interval_s", 1.0}, {"cannula_length_mm", 5},
+       {"pressure_model", "equation-of-state"}}, // the particle path (the default is VoxelDarcyInjectionTest's)
+      overrides);
   InjectionRunOptions o;
   o.outDir = out.string();
   o.progress = true;

@@ -67,7 +67,8 @@ InjectionRunResult runScaffold(const fs::path& out, bool snapshots) {
                                            {"volume_ml", 0.1},
                                            {"snapshot_interval_s", 0.5},
                                            {"cannula_length_mm", 5},
-                                           {"simulated_ct_snapshots", snapshots}});
+                                           {"simulated_ct_snapshots", snapshots},
+                                           {"pressure_model", "equation-of-state"}}); // particles voxelised
   InjectionRunOptions o;
   o.outDir = out.string();
   return runInjection(cementsph::scene::testing::scaffold(), scene, o);

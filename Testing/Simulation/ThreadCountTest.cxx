@@ -22,14 +22,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path injectWithThreads(int threads) {
+fs::path injectWithThreads(int threads, const std::string& pressureModel) {
   const fs::path data = CEMENTSPH_TEST_DATA_DIR;
-  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / ("threads-" + std::to_string(threads));
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / ("threads-" + pressureModel + "-" + std::to_string(threads));
   fs::remove_all(out);
   const auto r = cementsph::testing::runProgram(
       CEMENTSPH_EXECUTABLE, {"inject", "--ct", (data / "foam-phantom" / "pre.nrrd").string(), "--scene",
                              (data / "scenes" / "paper-1ml.json").string(), "--tip-mm", "22.325,21.855,21.75", "--set",
-                             "volume_ml=0.3", "--threads", std::to_string(threads), "--no-pictures", "--quiet",
+                             "volume_ml=0.3", "--set", "pressure_model=\"" + pressureModel + "\"", "--threads", std::to_string(threads), "--no-pictures", "--quiet",
                              "--out", out.string()});
   EXPECT_EQ(r.exitCode, 0) << r.err;
   return out;
@@ -38,7 +38,8 @@ fs::path injectWithThreads(int threads) {
 nlohmann::json metricsWithoutTimes(const fs::path& dir) {
   std::ifstream in(dir / "metrics.json");
   nlohmann::json m = nlohmann::json::parse(in);
-  for (const char* k : {"wall_time_s", "real_time_factor", "threads"}) m.erase(k);
+  for (const char* k : {"wall_time_s", "real_time_factor", "threads", "pressure_solve_wall_s", "pressure_assembly_wall_s"})
+    m.erase(k);
   return m;
 }
 
@@ -51,11 +52,17 @@ std::string text(const fs::path& p) {
 
 } // namespace
 
-TEST(ThreadCount, InjectOnThePhantomGivesTheSameResultOnOneAndTwoThreads) {
-  const fs::path one = injectWithThreads(1), two = injectWithThreads(2);
+// Both the particle model (the paper's equation of state) and the default voxel-grid Darcy filling.
+class ThreadCount : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ThreadCount, InjectOnThePhantomGivesTheSameResultOnOneAndTwoThreads) {
+  const fs::path one = injectWithThreads(1, GetParam()), two = injectWithThreads(2, GetParam());
   const nlohmann::json m1 = metricsWithoutTimes(one), m2 = metricsWithoutTimes(two);
   EXPECT_EQ(m1, m2) << m1.dump(1) << "\n" << m2.dump(1);
-  ASSERT_GT(m1.at("fixed_particles").get<double>(), 1e5); // big enough to share out
+  // Big enough to share out: 10^5 fixed particles, or 10^5 voxels in the region.
+  const auto& roi = m1.at("roi_voxels");
+  ASSERT_GT(std::max(m1.at("fixed_particles").get<double>(),
+                     roi[0].get<double>() * roi[1].get<double>() * roi[2].get<double>()), 1e5);
   EXPECT_EQ(text(one / "tip_pressure.csv"), text(two / "tip_pressure.csv"));
 
   char last[64];
@@ -77,3 +84,8 @@ TEST(ThreadCount, InjectOnThePhantomGivesTheSameResultOnOneAndTwoThreads) {
   for (std::size_t i = 0; i < n; ++i) voxels += ct1->GetBufferPointer()[i] != ct2->GetBufferPointer()[i];
   EXPECT_EQ(voxels, 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(PressureModels, ThreadCount, ::testing::Values("equation-of-state", "voxel-darcy"),
+                         [](const ::testing::TestParamInfo<std::string>& p) {
+                           return p.param == "voxel-darcy" ? std::string("VoxelDarcy") : std::string("EquationOfState");
+                         });

@@ -44,6 +44,10 @@ scene::SceneConfig StudyRunSpec::scene(const scene::SceneConfig& base) const {
   s.particleRadiusMm = particleRadiusMm;
   s.integrator = integrator;
   s.viscosityPaS = viscosityPaS;
+  // A study of particle radius and integrator is a study of the particle model: "auto" (which picks the
+  // voxel-grid Darcy filling for creeping flow, where the particle radius means nothing) runs the paper's
+  // equation of state here. A study plan that names a pressure model keeps it.
+  if (s.pressureModel == "auto") s.pressureModel = "equation-of-state";
   return s;
 }
 

@@ -1,0 +1,98 @@
+// The default creeping-flow path of `cementsph inject` (pressure_model voxel-darcy, VoxelDarcyInjection.h)
+// on a synthetic porous CT (ScaffoldCT.h), against the issue "Physical cement"'s oracles on a CT:
+//  * the pressure is proportional to the viscosity: 400 against 100 Pa s, tip and injection pressure 4.00
+//    within 2 %, and the same cement (simulated CTs equal to 0.01 HU, so the surfaces coincide);
+//  * the cement's volume is the injected volume at every snapshot (within 1 %; by construction to 1e-9);
+//  * no cement in a solid voxel (read from the simulated CT against the input's HU);
+//  * the files of an injection, and the metrics' keys.
+#include "cementsph/imaging/PolyDataIO.h"
+#include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/InjectionRunner.h"
+#include "ScaffoldCT.h"
+
+#include <gtest/gtest.h>
+#include <itkImageRegionConstIterator.h>
+#include <itkImageRegionConstIteratorWithIndex.h>
+#include <vtkPointData.h>
+
+#include <filesystem>
+
+using namespace cementsph;
+using namespace cementsph::scene;
+namespace fs = std::filesystem;
+
+namespace {
+
+InjectionRunResult run(double viscosityPaS, const fs::path& out) {
+  fs::remove_all(out);
+  const SceneConfig scene = sceneFromJson({{"tip_mm", {13, 13, 13}},
+                                           {"volume_ml", 0.3},
+                                           {"viscosity_pa_s", viscosityPaS},
+                                           {"snapshot_interval_s", 1.0},
+                                           {"cannula_length_mm", 5}});
+  InjectionRunOptions o;
+  o.outDir = out.string();
+  return runInjection(cementsph::scene::testing::scaffold(), scene, o);
+}
+
+} // namespace
+
+TEST(VoxelDarcyInjection, PressureFollowsViscosityAndTheCementKeepsItsVolumeAndItsPores) {
+  const fs::path scratch = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch";
+  const InjectionRunResult low = run(100.0, scratch / "voxel-darcy-100"), high = run(400.0, scratch / "voxel-darcy-400");
+  const nlohmann::json &a = low.metrics, &b = high.metrics;
+  EXPECT_EQ(a["pressure_model"], "voxel-darcy");
+  EXPECT_EQ(a["model"], "incompressible-darcy-on-voxels");
+  EXPECT_TRUE(a["pressure_is_physical"].get<bool>());
+  for (const char* key : {"final_tip_pressure_pa", "max_tip_pressure_pa", "cannula_pressure_drop_pa",
+                          "injection_pressure_pa", "max_injection_pressure_pa"}) {
+    ASSERT_GT(a[key].get<double>(), 0.0) << key;
+    EXPECT_NEAR(b[key].get<double>() / a[key].get<double>(), 4.0, 0.08) << key;
+  }
+  // The same cement: the simulated CTs agree voxel by voxel.
+  double worst = 0;
+  itk::ImageRegionConstIterator<imaging::ImageType> x(low.simulatedCt, low.simulatedCt->GetLargestPossibleRegion());
+  itk::ImageRegionConstIterator<imaging::ImageType> y(high.simulatedCt, high.simulatedCt->GetLargestPossibleRegion());
+  for (; !x.IsAtEnd(); ++x, ++y) worst = std::max(worst, double(std::abs(x.Get() - y.Get())));
+  EXPECT_LT(worst, 0.01);
+
+  // Volume at every snapshot.
+  ASSERT_GE(a["volume_history"].size(), 6u); // snapshots at 1..5 s and the end (6 s)
+  for (const auto& r : a["volume_history"]) {
+    const double injected = r["volume_injected_ml"].get<double>(), held = r["cement_volume_ml"].get<double>();
+    EXPECT_NEAR(held, injected, 0.01 * injected) << "at " << r["time_s"] << " s";
+  }
+  EXPECT_NEAR(a["volume_injected_ml"].get<double>(), 0.3, 1e-9);
+  // The scaffold's rods (1000 HU) hold no cement: their simulated HU is the CT's.
+  const auto ct = cementsph::scene::testing::scaffold();
+  itk::ImageRegionConstIteratorWithIndex<imaging::ImageType> s(low.simulatedCt, low.simulatedCt->GetLargestPossibleRegion());
+  std::size_t rods = 0, cement = 0;
+  for (; !s.IsAtEnd(); ++s) {
+    const auto idx = s.GetIndex();
+    if (cementsph::scene::testing::scaffoldRod(int(idx[0]), int(idx[1]), int(idx[2]))) {
+      ++rods;
+      EXPECT_FLOAT_EQ(s.Get(), 1000.f) << idx;
+    } else if (s.Get() > -100.f + 1500.f) {
+      ++cement;
+    }
+  }
+  EXPECT_EQ(rods, 13824u);
+  // At least half full in 0.3 ml / 0.125 mm^3 = 2400 voxels (the front's voxels are partly filled).
+  EXPECT_GT(cement, 2000u);
+  EXPECT_LT(cement, 2400u);
+
+  // Files, and the points of a snapshot: one per voxel holding cement, with their arrays.
+  const fs::path out = scratch / "voxel-darcy-100";
+  for (const char* f : {"metrics.json", "tip_pressure.csv", "particles.pvd", "simulated_ct.nrrd", "scene.json",
+                        "particles_0000.vtp", "particles_0005.vtp"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  auto poly = imaging::readPolyData((out / "particles_0005.vtp").string());
+  EXPECT_EQ(std::size_t(poly->GetNumberOfPoints()), a["cement_voxels"].get<std::size_t>());
+  for (const char* n : {"fill_fraction", "cement_volume_mm3", "pressure_pa", "darcy_velocity_m_per_s",
+                        "viscosity_pa_s", "porosity", "permeability_m2", "arrival_time_s", "age_s"})
+    EXPECT_NE(poly->GetPointData()->GetArray(n), nullptr) << n;
+  double volumeMm3 = 0;
+  auto* v = poly->GetPointData()->GetArray("cement_volume_mm3");
+  for (vtkIdType i = 0; i < v->GetNumberOfTuples(); ++i) volumeMm3 += v->GetTuple1(i);
+  EXPECT_NEAR(volumeMm3, 300.0, 1e-6);
+}
