@@ -32,7 +32,9 @@ struct PhantomNumerics {
   bool relisting = true;              // neighbour-list relisting (the same pairs as full rebuilds)
   // Set on the scene.
   std::string integrator = "overdamped";
-  std::string pressureModel = "equation-of-state"; // Eq. 6 (weakly compressible), whatever the scene default
+  // The incompressible Darcy filling on the voxels (VoxelDarcyFilling.h), the creeping-flow default since
+  // issue 9; the particle settings below then only document what the particle model would use.
+  std::string pressureModel = "voxel-darcy";
   double dragCoefficient = 8.7;
   double soundSpeedMPerS = 1.0;
   std::string fixedParticleSums = "exact"; // pair by pair (no table)
