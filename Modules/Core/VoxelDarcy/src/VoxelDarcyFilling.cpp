@@ -69,6 +69,7 @@ VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings setting
   arrival_.assign(n, -1.0);
   faceFlux_.assign(3 * n, 0.0f);
   unknown_.assign(n, -1);
+  barred_.assign(n, 0);
 }
 
 void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) {
@@ -96,6 +97,14 @@ void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) 
         if ((medium_.centre(c) - centre).norm() <= radius) source_.push_back(c);
       }
   std::sort(source_.begin(), source_.end());
+}
+
+void VoxelDarcyFilling::setEntryPressure(std::vector<float> entryPa) {
+  if (!entryPa.empty() && entryPa.size() != medium_.count())
+    throw std::invalid_argument("voxel Darcy: one entry pressure per voxel (or none)");
+  for (float e : entryPa)
+    if (!(e >= 0) || !std::isfinite(e)) throw std::invalid_argument("voxel Darcy: entry pressures must be finite and >= 0");
+  entryPressure_ = std::move(entryPa);
 }
 
 void VoxelDarcyFilling::setViscosity(double mu) {
@@ -206,8 +215,16 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   std::vector<Link> links;
   links.reserve(std::size_t(unknowns) / 2 + 64);
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> A(unknowns, unknowns);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(unknowns), x(unknowns);
-  if (unknowns > 0) {
+  Eigen::VectorXd b(unknowns), x(unknowns);
+  const bool capillary = !entryPressure_.empty();
+  auto frontPressure = [&](std::size_t m) {
+    return settings_.frontPressurePa + (capillary ? double(entryPressure_[m]) : 0.0);
+  };
+  // The system for the current set of open front voxels (a front voxel barred by its capillary entry
+  // pressure takes no flux: a no-flux face, as solid).
+  auto assemble = [&]() {
+    links.clear();
+    b.setZero();
     A.resizeNonZeros(std::size_t(unknowns) * 7);
     int* outer = A.outerIndexPtr();
     int* inner = A.innerIndexPtr();
@@ -235,7 +252,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
         const int coord = v[std::size_t(axis)] + sign;
         if (coord < 0 || coord >= medium_.size[axis]) continue;
         const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[axis]);
-        if (state_[m] == kClosed) continue;
+        if (state_[m] == kClosed || barred_[m]) continue;
         const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
         const double lm = mobility(m);
         if (state_[m] == kFilled) {
@@ -249,32 +266,22 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
           const double resistance = 0.5 * dist / lc + fill_[m] * dist / lm;
           const double t = area / resistance;
           diagonal += t;
-          b[row] += t * settings_.frontPressurePa;
+          b[row] += t * frontPressure(m);
           links.push_back({c, m, t});
         }
       }
       value[diagonalAt] = diagonal;
-      bool isSource = false;
-      if (filledSourcePore > 0)
-        isSource = std::binary_search(source_.begin(), source_.end(), c);
-      if (isSource) b[row] += flowRate * poreVolume(c) / filledSourcePore;
+      if (filledSourcePore > 0 && std::binary_search(source_.begin(), source_.end(), c))
+        b[row] += flowRate * poreVolume(c) / filledSourcePore;
     }
     outer[unknowns] = nnz;
     A.resizeNonZeros(nnz);
-  }
-  if (unknowns > 0 && links.empty())
-    throw FillingError("voxel Darcy: the pore space connected to the outlet is full at t = " + std::to_string(time_) +
-                       " s (no unfilled pore voxel borders the cement); enlarge roi_size_mm or inject less");
-  stats_.assemblySeconds += seconds(t0);
-
-  if (unknowns > 0) {
+  };
+  double solveSeconds = 0;
+  auto solve = [&]() {
     const auto ts = Clock::now();
     using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-#ifdef CEMENTSPH_VOXEL_DARCY_IC
-    Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::NaturalOrdering<int>>> cg;
-#else
     Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper> cg;
-#endif
     cg.setTolerance(settings_.solverTolerance);
     cg.setMaxIterations(settings_.maxSolverIterations);
     cg.compute(A);
@@ -287,8 +294,73 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
       throw FillingError("voxel Darcy: the pressure solve gave a non-finite value at t = " + std::to_string(time_) + " s");
     for (std::size_t c = 0; c < n; ++c)
       if (unknown_[c] >= 0) pressure_[c] = p[unknown_[c]];
+    solveSeconds += seconds(ts);
     stats_.solveSeconds += seconds(ts);
+  };
+  // Capillary entry: a front voxel takes cement only where the cement beside it is above its entry
+  // pressure (Washburn/Young-Laplace, set by setEntryPressure). Which voxels are open is found by
+  // solving with a guess, opening the barred voxels the solution pushes on and barring the open ones it
+  // would drain (the complementarity conditions flux >= 0, p_up <= p_entry where barred), until nothing
+  // changes; if every front voxel is barred, the easiest one opens (the pressure rises until it does).
+  std::vector<std::size_t> front;
+  if (capillary && unknowns > 0) {
+    for (std::size_t c = 0; c < n; ++c) {
+      if (state_[c] != kEmpty) continue;
+      const auto v = medium_.ijk(c);
+      for (int a = 0; a < 3; ++a)
+        for (int sign : {-1, 1}) {
+          const int coord = v[std::size_t(a)] + sign;
+          if (coord < 0 || coord >= medium_.size[a]) continue;
+          if (state_[std::size_t(std::ptrdiff_t(c) + sign * stride[a])] == kFilled) {
+            if (front.empty() || front.back() != c) front.push_back(c);
+          }
+        }
+    }
   }
+  auto upstreamPressure = [&](std::size_t m) {
+    double up = -std::numeric_limits<double>::infinity();
+    const auto v = medium_.ijk(m);
+    for (int a = 0; a < 3; ++a)
+      for (int sign : {-1, 1}) {
+        const int coord = v[std::size_t(a)] + sign;
+        if (coord < 0 || coord >= medium_.size[a]) continue;
+        const std::size_t c = std::size_t(std::ptrdiff_t(m) + sign * stride[a]);
+        if (state_[c] == kFilled) up = std::max(up, pressure_[c]);
+      }
+    return up;
+  };
+  if (capillary)
+    for (std::size_t m : front) barred_[m] = upstreamPressure(m) <= frontPressure(m);
+  if (unknowns > 0) {
+    for (int round = 0;; ++round) {
+      if (capillary && !front.empty()) {
+        bool anyOpen = false;
+        for (std::size_t m : front) anyOpen = anyOpen || !barred_[m];
+        if (!anyOpen) {
+          std::size_t easiest = front.front();
+          for (std::size_t m : front)
+            if (upstreamPressure(m) - frontPressure(m) > upstreamPressure(easiest) - frontPressure(easiest)) easiest = m;
+          barred_[easiest] = 0;
+        }
+      }
+      assemble();
+      if (links.empty())
+        throw FillingError("voxel Darcy: the pore space connected to the outlet is full at t = " + std::to_string(time_) +
+                           " s (no unfilled pore voxel borders the cement); enlarge roi_size_mm or inject less");
+      solve();
+      if (!capillary) break;
+      bool changed = false;
+      for (std::size_t m : front) {
+        const bool open = upstreamPressure(m) > frontPressure(m);
+        if (open == !barred_[m]) continue;
+        barred_[m] = !open;
+        changed = true;
+      }
+      ++stats_.capillaryRounds;
+      if (!changed || round >= 50) break;
+    }
+  }
+  stats_.assemblySeconds += seconds(t0) - solveSeconds;
   stats_.lastUnknowns = std::size_t(unknowns);
 
   // Face fluxes of the solve (for velocities and shear rates), and the inflow of each front voxel.

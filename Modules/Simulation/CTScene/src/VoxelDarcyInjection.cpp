@@ -10,6 +10,8 @@
 #include "cementsph/sph/Simulation.h"
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
 
+#include <itkImage.h>
+#include <itkSignedMaurerDistanceMapImageFilter.h>
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkPointData.h>
@@ -41,6 +43,43 @@ std::string fmt(double x, int precision = 4) {
   std::ostringstream s;
   s << std::setprecision(precision) << x;
   return s.str();
+}
+
+// Capillary entry pressure of each pore voxel [Pa]: Young-Laplace for the cement entering a pore of the
+// local radius r as the non-wetting phase (cos theta = 1, the largest entry pressure), p_e = 2 sigma / r.
+// r is the distance from the voxel's centre to the solid's surface: the Euclidean distance to the nearest
+// solid voxel centre (ITK's signed Maurer distance map, in mm) less half a voxel, at least half a voxel.
+std::vector<float> capillaryEntryPressure(const PorousSolid& solid, double tensionNPerM) {
+  using Mask = itk::Image<unsigned char, 3>;
+  using Distance = itk::Image<float, 3>;
+  auto mask = Mask::New();
+  Mask::RegionType region;
+  Mask::SizeType size;
+  for (unsigned a = 0; a < 3; ++a) size[a] = itk::SizeValueType(solid.grid.size[int(a)]);
+  region.SetSize(size);
+  mask->SetRegions(region);
+  Mask::SpacingType spacing;
+  for (unsigned a = 0; a < 3; ++a) spacing[a] = solid.grid.spacing[int(a)] * 1e3;
+  mask->SetSpacing(spacing);
+  mask->Allocate();
+  std::copy(solid.solid.begin(), solid.solid.end(), mask->GetBufferPointer());
+  const double half = 0.5 * solid.grid.spacing.minCoeff() * 1e3; // mm
+  std::vector<float> entry(solid.grid.count(), 0.0f);
+  if (solid.solidVoxels == 0) return entry; // no solid: no throats
+  auto distance = itk::SignedMaurerDistanceMapImageFilter<Mask, Distance>::New();
+  distance->SetInput(mask);
+  distance->SetBackgroundValue(0);
+  distance->SetInsideIsPositive(false);
+  distance->SetSquaredDistance(false);
+  distance->SetUseImageSpacing(true);
+  distance->Update();
+  const float* d = distance->GetOutput()->GetBufferPointer();
+  for (std::size_t c = 0; c < entry.size(); ++c) {
+    if (solid.solid[c]) continue;
+    const double rMm = std::max(double(d[c]) - half, half); // d: to the nearest solid voxel's centre
+    entry[c] = float(2.0 * tensionNPerM / (rMm * 1e-3));
+  }
+  return entry;
 }
 
 // One point per voxel holding cement.
@@ -135,6 +174,7 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
 
   VoxelDarcyFilling filling(std::move(medium));
   filling.setSource(tip, sourceRadius);
+  if (scene.capillaryTensionNPerM > 0) filling.setEntryPressure(capillaryEntryPressure(solid, scene.capillaryTensionNPerM));
   const sph::ViscositySchedule viscosity = scene.viscositySchedule();
 
   std::vector<TipRecord> tipSeries;
@@ -302,6 +342,9 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   metrics["pressure_solve_wall_s"] = st.solveSeconds;
   metrics["pressure_assembly_wall_s"] = st.assemblySeconds;
   metrics["front_voxels"] = st.lastFrontVoxels;
+  metrics["capillary_tension_n_per_m"] = scene.capillaryTensionNPerM;
+  metrics["capillary_entry"] = scene.capillaryTensionNPerM > 0;
+  metrics["capillary_solve_rounds"] = st.capillaryRounds;
   metrics["outlet_source_radius_mm"] = sourceRadius * 1e3;
   metrics["outlet_source_voxels"] = sourceVoxels;
   metrics["final_tip_pressure_pa"] = finalPressure;

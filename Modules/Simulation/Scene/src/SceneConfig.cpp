@@ -126,6 +126,8 @@ void applySceneJson(SceneConfig& s, const json& j) {
                       s.pressureModel + "\")");
     } else if (key == "pore_permeability_m2") {
       s.porePermeabilityM2 = number(v, key);
+    } else if (key == "capillary_tension_n_per_m") {
+      s.capillaryTensionNPerM = number(v, key);
     } else
       throw std::invalid_argument("scene: unknown key '" + key + "'");
   }
@@ -172,6 +174,8 @@ void SceneConfig::validate() const {
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
   requirePositive(solidMassFactor, "solid_mass_factor");
   if (porePermeabilityM2) requirePositive(*porePermeabilityM2, "pore_permeability_m2");
+  if (!(capillaryTensionNPerM >= 0) || !std::isfinite(capillaryTensionNPerM) || capillaryTensionNPerM > 1.0)
+    fail("capillary_tension_n_per_m", "must be in [0, 1] N/m (0: no capillary entry)");
   if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
   if (soundSpeedMPerS) requirePositive(*soundSpeedMPerS, "sound_speed_m_per_s");
   auto requireFraction = [](const std::optional<double>& x, double upper, const char* key) {
@@ -253,6 +257,7 @@ json toJson(const SceneConfig& s) {
   if (s.neighbourSkinOverH) j["neighbour_skin_over_h"] = *s.neighbourSkinOverH;
   j["pressure_model"] = s.pressureModel;
   if (s.porePermeabilityM2) j["pore_permeability_m2"] = *s.porePermeabilityM2;
+  j["capillary_tension_n_per_m"] = s.capillaryTensionNPerM;
   return j;
 }
 

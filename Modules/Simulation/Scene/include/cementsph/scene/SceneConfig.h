@@ -37,6 +37,9 @@
 //                                   equation-of-state the paper's Eq. 6; auto chooses from the scene's
 //                                   dimensionless numbers (ModelSelection.h)                 auto
 //   pore_permeability_m2            voxel-darcy: permeability of a resolved pore voxel   preset drag k0 = h^5/(Cf d^3)
+//   capillary_tension_n_per_m       voxel-darcy: interfacial tension sigma of cement against the displaced
+//                                   fluid; > 0 gives each pore voxel a capillary entry pressure 2 sigma / r
+//                                   (r its distance to the solid; VALIDATION.md, the viscosity trend)     0 (off)
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
 #pragma once
@@ -80,6 +83,7 @@ struct SceneConfig {
   std::optional<double> fixedFieldSpacingOverH, maxDisplacementOverH, neighbourSkinOverH;
   std::string pressureModel = "auto";
   std::optional<double> porePermeabilityM2; // voxel-darcy: permeability of a resolved pore voxel [m^2]
+  double capillaryTensionNPerM = 0.0;       // voxel-darcy: capillary entry 2 sigma / r at the front; 0 off
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
