@@ -7,6 +7,7 @@
 //  * the pressure is proportional to the viscosity and the cement's shape does not depend on it;
 //  * the cement's volume is the injected volume at every step.
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
+#include "cementsph/sph/Viscosity/Rheology.h"
 
 #include <gtest/gtest.h>
 
@@ -158,6 +159,92 @@ TEST(VoxelDarcyFilling, ACementThatCannotGoOnIsAClearError) {
       },
       FillingError);
   EXPECT_THROW(filling.setSource(Eigen::Vector3d::Zero(), 1e-3), std::invalid_argument); // a solid voxel
+}
+
+// Radial power-law Darcy flow (issue "Cement rheology"): with mu = K gamma_dot^(n-1) and the Darcy-scale
+// shear rate gamma_dot = alpha q / sqrt(k phi) (sph::darcyShearRate), |grad p| = C q^n with
+// C = K alpha^(n-1) (k phi)^((1-n)/2) / k and q = Q / (4 pi r^2), so outside the outlet
+// p(r) = C (Q / 4 pi)^n (r^(1-2n) - R^(1-2n)) / (2n - 1): the profile follows r^(1-2n), and at the same
+// volume (the same R) the pressure scales as Q^n.
+struct PowerLawRun {
+  VoxelDarcyFilling filling;
+  double R;
+};
+
+PowerLawRun injectPowerLaw(double n, double flowRate, double volume, double minimum = 1e-3, double maximum = 1e9) {
+  sph::RheologyParameters p;
+  p.consistencyPaSn = kMu;
+  p.flowIndex = n;
+  p.minimumViscosityPaS = minimum;
+  p.maximumViscosityPaS = maximum;
+  std::shared_ptr<const sph::Rheology> law = sph::makeRheology("power-law", p);
+  PowerLawRun run{VoxelDarcyFilling(cube(1.0, kK)), std::cbrt(3 * volume / (4 * kPi))};
+  run.filling.setSource(Eigen::Vector3d::Zero(), 1.5e-3);
+  run.filling.setViscosity(kMu);
+  run.filling.setShearRateViscosity([law](double g) { return law->viscosity(g); }, n, 4);
+  inject(run.filling, flowRate, volume);
+  return run;
+}
+
+TEST(VoxelDarcyFilling, PowerLawPressureProfileFollowsRToTheOneMinusTwoN) {
+  const double n = 0.6;
+  const PowerLawRun run = injectPowerLaw(n, kQ, kVolume);
+  const double alpha = (3 * n + 1) / (4 * n) * 12 / std::sqrt(150.0);
+  const double C = kMu * std::pow(alpha, n - 1) * std::pow(kK, 0.5 * (1 - n)) / kK;
+  auto analytic = [&](double r) {
+    return C * std::pow(kQ / (4 * kPi), n) * (std::pow(r, 1 - 2 * n) - std::pow(run.R, 1 - 2 * n)) / (2 * n - 1);
+  };
+  const VoxelMedium& m = run.filling.medium();
+  for (double r : {0.35 * run.R, 0.5 * run.R, 0.7 * run.R}) {
+    double sum = 0;
+    int count = 0;
+    for (std::size_t c = 0; c < m.count(); ++c) {
+      const double rc = m.centre(c).norm();
+      if (run.filling.filled(c) && std::abs(rc - r) < 0.25e-3) {
+        sum += run.filling.pressure()[c] - (analytic(rc) - analytic(r));
+        ++count;
+      }
+    }
+    ASSERT_GT(count, 10);
+    std::printf("power law n %.1f: p(%.3f mm) %.1f Pa against %.1f Pa\n", n, r * 1e3, sum / count, analytic(r));
+    EXPECT_NEAR(sum / count / analytic(r), 1.0, 0.05) << "at r = " << r * 1e3 << " mm";
+  }
+}
+
+TEST(VoxelDarcyFilling, PowerLawTipPressureScalesAsTheFlowRateToTheN) {
+  for (double n : {0.4, 0.7}) {
+    const double single = injectPowerLaw(n, kQ, 0.5e-6).filling.sourcePressure();
+    const double twice = injectPowerLaw(n, 2 * kQ, 0.5e-6).filling.sourcePressure();
+    std::printf("power law n %.1f: tip pressure ratio at 2Q %.4f against 2^n %.4f\n", n, twice / single, std::pow(2.0, n));
+    EXPECT_NEAR(twice / single / std::pow(2.0, n), 1.0, 0.03) << "n " << n;
+  }
+}
+
+TEST(VoxelDarcyFilling, PowerLawOfIndexOneIsTheNewtonianRunExactly) {
+  const PowerLawRun run = injectPowerLaw(1.0, kQ, 0.3e-6);
+  VoxelDarcyFilling newtonian(cube(1.0, kK));
+  newtonian.setSource(Eigen::Vector3d::Zero(), 1.5e-3);
+  newtonian.setViscosity(kMu);
+  inject(newtonian, kQ, 0.3e-6);
+  EXPECT_EQ(run.filling.statistics().steps, newtonian.statistics().steps);
+  EXPECT_NEAR(run.filling.sourcePressure(), newtonian.sourcePressure(), 1e-9 * newtonian.sourcePressure());
+  double worst = 0;
+  for (std::size_t c = 0; c < newtonian.fill().size(); ++c)
+    worst = std::max(worst, std::abs(run.filling.fill()[c] - newtonian.fill()[c]));
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(VoxelDarcyFilling, ViscosityBoundsHoldAndNothingIsNaNAtExtremeFlowIndices) {
+  for (double n : {0.2, 1.5}) {
+    const PowerLawRun run = injectPowerLaw(n, kQ, 0.2e-6, 10.0, 1e4);
+    const auto& mu = run.filling.viscosity();
+    for (std::size_t c = 0; c < mu.size(); ++c) {
+      if (!run.filling.filled(c)) continue;
+      ASSERT_TRUE(std::isfinite(mu[c]) && mu[c] >= 10.0 && mu[c] <= 1e4) << "n " << n << ": " << mu[c];
+      ASSERT_TRUE(std::isfinite(run.filling.pressure()[c]));
+    }
+    EXPECT_TRUE(std::isfinite(run.filling.sourcePressure()) && run.filling.sourcePressure() > 0);
+  }
 }
 
 } // namespace

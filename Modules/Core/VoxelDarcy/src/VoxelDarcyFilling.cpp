@@ -1,5 +1,7 @@
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
 
+#include "cementsph/sph/Viscosity/Rheology.h"
+
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 
@@ -105,6 +107,47 @@ void VoxelDarcyFilling::setEntryPressure(std::vector<float> entryPa) {
   for (float e : entryPa)
     if (!(e >= 0) || !std::isfinite(e)) throw std::invalid_argument("voxel Darcy: entry pressures must be finite and >= 0");
   entryPressure_ = std::move(entryPa);
+}
+
+void VoxelDarcyFilling::setShearRateViscosity(std::function<double(double)> law, double flowIndex, int picard) {
+  if (law && (!(flowIndex > 0) || picard < 1))
+    throw std::invalid_argument("voxel Darcy: a shear-rate law needs a flow index > 0 and at least one iteration");
+  shearLaw_ = std::move(law);
+  flowIndex_ = flowIndex;
+  picardIterations_ = shearLaw_ ? picard : 1;
+}
+
+// Each filled voxel's viscosity at its Darcy-scale shear rate (the fluxes of the last solve); a voxel on
+// the front takes the viscosity of the cement flowing into it (the largest inflow's upstream voxel).
+void VoxelDarcyFilling::updateShearViscosity() {
+  const std::size_t n = medium_.count();
+  for (std::size_t c = 0; c < n; ++c) {
+    if (state_[c] != kFilled) continue;
+    const double q = darcyVelocity(c).norm();
+    const double mu = shearLaw_(sph::darcyShearRate(q, medium_.permeability[c], medium_.porosity[c], flowIndex_));
+    if (!(mu > 0) || !std::isfinite(mu))
+      throw FillingError("voxel Darcy: the viscosity law gave " + std::to_string(mu) + " Pa s at " + mm(medium_.centre(c)));
+    viscosity_[c] = mu;
+  }
+  const int nx = medium_.size[0], ny = medium_.size[1];
+  const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
+  for (std::size_t c = 0; c < n; ++c) {
+    if (state_[c] != kEmpty) continue;
+    const auto v = medium_.ijk(c);
+    double best = -1;
+    for (int a = 0; a < 3; ++a)
+      for (int sign : {-1, 1}) {
+        const int coord = v[std::size_t(a)] + sign;
+        if (coord < 0 || coord >= medium_.size[a]) continue;
+        const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[a]);
+        if (state_[m] != kFilled) continue;
+        const double inflow = std::abs(faceFlux_[3 * (sign > 0 ? c : m) + std::size_t(a)]);
+        if (inflow > best) {
+          best = inflow;
+          viscosity_[c] = viscosity_[m];
+        }
+      }
+  }
 }
 
 void VoxelDarcyFilling::setViscosity(double mu) {
@@ -329,9 +372,33 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
       }
     return up;
   };
+  // Face fluxes of the last solve (velocities, shear rates), signed along +axis; a front link's is its inflow.
+  auto faceFluxes = [&]() {
+    std::fill(faceFlux_.begin(), faceFlux_.end(), 0.0f);
+    for (std::size_t c = 0; c < n; ++c) {
+      if (state_[c] != kFilled) continue;
+      const auto v = medium_.ijk(c);
+      for (int a = 0; a < 3; ++a) {
+        if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
+        const std::size_t m = c + std::size_t(stride[a]);
+        if (state_[m] != kFilled) continue;
+        const double lc = mobility(c), lm = mobility(m);
+        const double t = faceArea_[std::size_t(a)] * 2.0 * lc * lm / ((lc + lm) * faceDistance_[std::size_t(a)]);
+        faceFlux_[3 * c + std::size_t(a)] = float(t * (pressure_[c] - pressure_[m]));
+      }
+    }
+    for (const Link& l : links) {
+      const double q = std::max(0.0, l.t * (pressure_[l.from] - frontPressure(l.to)));
+      const std::ptrdiff_t d = std::ptrdiff_t(l.to) - std::ptrdiff_t(l.from);
+      for (int a = 0; a < 3; ++a)
+        if (d == stride[a]) faceFlux_[3 * l.from + std::size_t(a)] = float(q);
+        else if (d == -stride[a]) faceFlux_[3 * l.to + std::size_t(a)] = float(-q);
+    }
+  };
   if (capillary)
     for (std::size_t m : front) barred_[m] = upstreamPressure(m) <= frontPressure(m);
-  if (unknowns > 0) {
+  for (int pass = 0; pass < (unknowns > 0 ? picardIterations_ : 0); ++pass) {
+    if (shearLaw_) updateShearViscosity();
     for (int round = 0;; ++round) {
       if (capillary && !front.empty()) {
         bool anyOpen = false;
@@ -359,34 +426,17 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
       ++stats_.capillaryRounds;
       if (!changed || round >= 50) break;
     }
+    if (shearLaw_) faceFluxes();
   }
   stats_.assemblySeconds += seconds(t0) - solveSeconds;
   stats_.lastUnknowns = std::size_t(unknowns);
 
-  // Face fluxes of the solve (for velocities and shear rates), and the inflow of each front voxel.
-  std::fill(faceFlux_.begin(), faceFlux_.end(), 0.0f);
-  for (std::size_t c = 0; c < n; ++c) {
-    if (state_[c] != kFilled) continue;
-    const auto v = medium_.ijk(c);
-    for (int a = 0; a < 3; ++a) {
-      if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
-      const std::size_t m = c + std::size_t(stride[a]);
-      if (state_[m] != kFilled) continue;
-      const double lc = mobility(c), lm = mobility(m);
-      const double t = faceArea_[std::size_t(a)] * 2.0 * lc * lm / ((lc + lm) * faceDistance_[std::size_t(a)]);
-      faceFlux_[3 * c + std::size_t(a)] = float(t * (pressure_[c] - pressure_[m]));
-    }
-  }
+  faceFluxes();
   std::vector<std::pair<std::size_t, double>> inflow; // front voxel, m^3/s
   inflow.reserve(links.size());
   for (const Link& l : links) {
-    const double q = std::max(0.0, l.t * (pressure_[l.from] - settings_.frontPressurePa));
+    const double q = std::max(0.0, l.t * (pressure_[l.from] - frontPressure(l.to)));
     inflow.push_back({l.to, q});
-    // Its face flux, signed along +axis.
-    const std::ptrdiff_t d = std::ptrdiff_t(l.to) - std::ptrdiff_t(l.from);
-    for (int a = 0; a < 3; ++a)
-      if (d == stride[a]) faceFlux_[3 * l.from + std::size_t(a)] = float(q);
-      else if (d == -stride[a]) faceFlux_[3 * l.to + std::size_t(a)] = float(-q);
   }
   if (unknowns == 0)
     for (std::size_t c : source_)

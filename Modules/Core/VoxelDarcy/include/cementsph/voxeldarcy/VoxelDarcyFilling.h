@@ -104,6 +104,12 @@ public:
   // pore throat, Young-Laplace 2 sigma cos(theta) / r). With none, the front is at p_front everywhere.
   void setEntryPressure(std::vector<float> entryPressurePa);
   void setVoxelViscosity(std::vector<double> viscosityPaS);
+  // A shear-thinning cement: each voxel's viscosity mu(gamma_dot) from its Darcy-scale shear rate
+  // (sph::darcyShearRate with the law's flow index), re-evaluated `picardIterations` times per step (solve,
+  // shear rates from the new fluxes, viscosities, solve again); the first evaluation uses the last step's
+  // fluxes. `law` must return a finite positive bounded viscosity (sph::Rheology::viscosity does). An empty
+  // law goes back to the viscosity set by setViscosity.
+  void setShearRateViscosity(std::function<double(double)> law, double flowIndex, int picardIterations = 3);
 
   // Advances by at most dtMax [s] at the flow rate [m^3/s]; returns the step taken (> 0). Throws FillingError
   // when the cement has nowhere to go.
@@ -131,6 +137,7 @@ private:
   double poreVolume(std::size_t c) const { return double(medium_.porosity[c]) * voxelVolume_; }
   double mobility(std::size_t c) const { return medium_.permeability[c] / viscosity_[c]; }
   void depositExcess(std::size_t from, double volume);
+  void updateShearViscosity();
   void markFilled(std::size_t c);
 
   VoxelMedium medium_;
@@ -146,6 +153,9 @@ private:
   std::vector<int> unknown_; // voxel -> unknown index or -1
   std::vector<float> entryPressure_;  // per voxel [Pa]; empty: no capillary entry
   std::vector<std::uint8_t> barred_;  // front voxel held back by its entry pressure this step
+  std::function<double(double)> shearLaw_;
+  double flowIndex_ = 1.0;
+  int picardIterations_ = 1;
 };
 
 } // namespace cementsph::voxeldarcy
