@@ -1,9 +1,14 @@
 // cementsph viscosity: cement viscosity from a syringe pressure drop measured while pressing cement out
 // through the cannula, by Hagen-Poiseuille (paper Eq. 13: mu = pi D^4 dP / (128 L Q)); or, given a
-// viscosity, the pressure drop the cannula will take.
+// viscosity, the pressure drop the cannula will take. With --flow-index n the cement is a power law
+// (consistency K in Pa.s^n): the drop by Rabinowitsch-Mooney (exact), or K from a measured drop at that n
+// (TubeFlow.h). --cannula-gauge picks the inner diameter from the gauge table; --json prints one object.
 #include "CommandRegistry.h"
 
 #include "cementsph/sph/HagenPoiseuille.h"
+#include "cementsph/sph/TubeFlow.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <iostream>
@@ -12,8 +17,10 @@
 namespace {
 
 struct ViscosityOptions {
-  double pressureDropMPa = 0, viscosityPaS = 0;
+  double pressureDropMPa = 0, viscosityPaS = 0, consistencyPaSn = 0, flowIndex = 0;
   double diameterMm = 2.388, lengthMm = 90.0, flowRateMlPerS = 0.05; // the paper's 11G, 9 cm cannula
+  std::string gauge;
+  bool json = false;
 };
 
 void requirePositive(double v, const char* option) {
@@ -21,21 +28,46 @@ void requirePositive(double v, const char* option) {
 }
 
 int runViscosity(const ViscosityOptions& o) {
-  requirePositive(o.diameterMm, "--cannula-inner-diameter-mm");
+  const double diameterMm = o.gauge.empty() ? o.diameterMm : cementsph::sph::cannulaInnerDiameterMm(o.gauge);
+  requirePositive(diameterMm, "--cannula-inner-diameter-mm");
   requirePositive(o.lengthMm, "--cannula-length-mm");
   requirePositive(o.flowRateMlPerS, "--flow-rate-ml-per-s");
-  const bool fromPressure = o.pressureDropMPa > 0, fromViscosity = o.viscosityPaS > 0;
-  if (fromPressure == fromViscosity)
-    throw std::invalid_argument("give exactly one of --pressure-drop-mpa (to get the viscosity) or --viscosity-pa-s");
-  const double D = o.diameterMm * 1e-3, L = o.lengthMm * 1e-3, Q = o.flowRateMlPerS * 1e-6;
-  if (fromPressure) {
-    const double mu = cementsph::sph::hagenPoiseuilleViscosity(o.pressureDropMPa * 1e6, L, Q, D);
-    std::cout << "viscosity_pa_s " << mu << "\n";
+  const bool powerLaw = o.flowIndex != 0 || o.consistencyPaSn != 0;
+  if (powerLaw && !(o.flowIndex > 0 && o.flowIndex <= 3))
+    throw std::invalid_argument("--flow-index must be in (0, 3] (a power-law cement needs it)");
+  const bool fromPressure = o.pressureDropMPa > 0;
+  const bool fromLaw = powerLaw ? o.consistencyPaSn > 0 : o.viscosityPaS > 0;
+  if (fromPressure == fromLaw || (powerLaw && o.viscosityPaS > 0))
+    throw std::invalid_argument(powerLaw ? "give exactly one of --pressure-drop-mpa (to get K) or --consistency-pa-s-n, with --flow-index"
+                                         : "give exactly one of --pressure-drop-mpa (to get the viscosity) or --viscosity-pa-s");
+  const double D = diameterMm * 1e-3, L = o.lengthMm * 1e-3, Q = o.flowRateMlPerS * 1e-6;
+  nlohmann::json j{{"law", powerLaw ? "power-law" : "newtonian"},
+                   {"cannula_inner_diameter_mm", diameterMm},
+                   {"cannula_length_mm", o.lengthMm},
+                   {"flow_rate_ml_per_s", o.flowRateMlPerS},
+                   {"bore_speed_mm_per_s", cementsph::sph::boreSpeed(Q, D) * 1e3}};
+  if (!o.gauge.empty()) j["cannula_gauge"] = o.gauge;
+  double dropPa = o.pressureDropMPa * 1e6;
+  if (powerLaw) {
+    j["flow_index"] = o.flowIndex;
+    const double K = fromPressure ? cementsph::sph::powerLawConsistency(dropPa, o.flowIndex, L, Q, D) : o.consistencyPaSn;
+    if (!fromPressure) dropPa = cementsph::sph::powerLawTubePressureDrop(K, o.flowIndex, L, Q, D);
+    j["consistency_pa_s_n"] = K;
   } else {
-    const double dP = cementsph::sph::hagenPoiseuillePressureDrop(o.viscosityPaS, L, Q, D);
-    std::cout << "pressure_drop_mpa " << dP * 1e-6 << "\n";
+    const double mu = fromPressure ? cementsph::sph::hagenPoiseuilleViscosity(dropPa, L, Q, D) : o.viscosityPaS;
+    if (!fromPressure) dropPa = cementsph::sph::hagenPoiseuillePressureDrop(mu, L, Q, D);
+    j["viscosity_pa_s"] = mu;
   }
-  std::cout << "bore_speed_mm_per_s " << cementsph::sph::boreSpeed(Q, D) * 1e3 << "\n";
+  j["pressure_drop_pa"] = dropPa;
+  j["pressure_drop_mpa"] = dropPa * 1e-6;
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  if (fromPressure) std::cout << (powerLaw ? "consistency_pa_s_n " : "viscosity_pa_s ")
+                              << (powerLaw ? j["consistency_pa_s_n"] : j["viscosity_pa_s"]).get<double>() << "\n";
+  else std::cout << "pressure_drop_mpa " << dropPa * 1e-6 << "\n";
+  std::cout << "bore_speed_mm_per_s " << j["bore_speed_mm_per_s"].get<double>() << "\n";
   return 0;
 }
 
@@ -47,11 +79,16 @@ cementsph::app::CommandRunner setupViscosity(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--cannula-length-mm", o->lengthMm, "cannula length [mm]")->capture_default_str();
   sub.add_option("--flow-rate-ml-per-s", o->flowRateMlPerS, "flow rate [ml/s]")->capture_default_str();
+  sub.add_option("--consistency-pa-s-n", o->consistencyPaSn, "power-law consistency K [Pa.s^n] (prints the drop)");
+  sub.add_option("--flow-index", o->flowIndex, "power-law flow index n (with --consistency-pa-s-n or --pressure-drop-mpa)");
+  sub.add_option("--cannula-gauge", o->gauge,
+                 "cannula gauge instead of the inner diameter: " + cementsph::sph::knownCannulaGauges());
+  sub.add_flag("--json", o->json, "print one JSON object (pressure_drop_pa, ...)");
   return [o] { return runViscosity(*o); };
 }
 
 } // namespace
 
 CEMENTSPH_REGISTER_COMMAND(viscosity, "viscosity",
-                           "Cement viscosity from a cannula pressure drop, or the drop from a viscosity (Eq. 13)",
+                           "Cement viscosity (Eq. 13) or power-law consistency from a cannula pressure drop, or the drop",
                            setupViscosity)

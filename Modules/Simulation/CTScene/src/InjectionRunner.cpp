@@ -126,6 +126,9 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
   if (choice.pressureModel == "voxel-darcy")
     return detail::runVoxelDarcyInjection(ct, scene, o, {preset, m, solid, choice, wallStart});
+  if (scene.viscosityLaw != "newtonian" || !scene.curingTable.empty())
+    throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw + "\" and curing_table need pressure_model "
+                                "\"voxel-darcy\" (the particle models are Newtonian; got \"" + choice.pressureModel + "\")");
   m.pressureModel = choice.pressureModel;
   const bool incompressible = m.pressureModel == "incompressible";
 

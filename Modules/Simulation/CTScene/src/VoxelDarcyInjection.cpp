@@ -8,6 +8,7 @@
 #include "cementsph/scene/SimulatedCT.h"
 #include "cementsph/sph/HagenPoiseuille.h"
 #include "cementsph/sph/Simulation.h"
+#include "cementsph/sph/TubeFlow.h"
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
 
 #include <itkImage.h>
@@ -19,7 +20,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -176,6 +180,28 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   filling.setSource(tip, sourceRadius);
   if (scene.capillaryTensionNPerM > 0) filling.setEntryPressure(capillaryEntryPressure(solid, scene.capillaryTensionNPerM));
   const sph::ViscositySchedule viscosity = scene.viscositySchedule();
+  // The cement's law: Newtonian (the schedule) or shear-thinning, times the curing factor.
+  const bool shearThinning = scene.viscosityLaw != "newtonian";
+  const std::shared_ptr<const sph::Rheology> law = sph::makeRheology(scene.viscosityLaw, scene.rheology);
+  const double lower = scene.rheology.minimumViscosityPaS, upper = scene.rheology.maximumViscosityPaS;
+  double cachedFactor = -1, cachedCannula = 0;
+  auto cannulaDrop = [&](double factor, double mu) {
+    if (!shearThinning) return sph::hagenPoiseuillePressureDrop(mu, cannulaLength, flowRate, innerDiameter);
+    if (factor != cachedFactor) { // the general integral takes ~20 ms: once per curing factor
+      if (scene.viscosityLaw == "power-law") {
+        cachedCannula = sph::powerLawTubePressureDrop(factor * scene.rheology.consistencyPaSn, scene.rheology.flowIndex,
+                                                      cannulaLength, flowRate, innerDiameter);
+      } else {
+        sph::RheologyParameters p = scene.rheology;
+        p.zeroShearViscosityPaS *= factor;
+        p.infiniteShearViscosityPaS *= factor;
+        cachedCannula = sph::tubePressureDrop(*sph::makeRheology(scene.viscosityLaw, p), cannulaLength, flowRate,
+                                              innerDiameter);
+      }
+      cachedFactor = factor;
+    }
+    return cachedCannula;
+  };
 
   std::vector<TipRecord> tipSeries;
   json volumeHistory = json::array();
@@ -229,14 +255,19 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   bool stopped = false;
   try {
     while (filling.time() < endTime) {
-      const double mu = viscosity.at(filling.time());
-      filling.setViscosity(mu);
+      const double factor = scene.curingFactor(filling.time());
+      const double mu = std::clamp(factor * viscosity.at(filling.time()), lower, upper);
+      if (shearThinning)
+        filling.setShearRateViscosity(
+            [law, factor, lower, upper](double g) { return std::clamp(factor * law->unbounded(g), lower, upper); },
+            law->flowIndex(), 3);
+      else
+        filling.setViscosity(mu);
       // At most 1 % of the injection per step: progress every 1 % and a tip-pressure curve with 100 points.
       double dtMax = std::min(T - filling.time(), 0.01 * T);
       if (nextSnapshot - filling.time() > 1e-9 * T) dtMax = std::min(dtMax, nextSnapshot - filling.time());
       filling.step(flowRate, dtMax);
-      tipSeries.push_back({filling.time(), filling.sourcePressure(),
-                           sph::hagenPoiseuillePressureDrop(mu, cannulaLength, flowRate, innerDiameter)});
+      tipSeries.push_back({filling.time(), filling.sourcePressure(), cannulaDrop(factor, mu)});
       if (filling.time() >= nextSnapshot * (1 - 1e-12) && filling.time() < endTime) {
         writeSnapshot();
         while (nextSnapshot <= filling.time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
@@ -320,7 +351,18 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   metrics["recommended_pressure_model"] = in.choice.recommended;
   metrics["pressure_model"] = "voxel-darcy";
   metrics["resistance"] = scene.porePermeabilityM2 ? "pore-permeability (scene)" : "pore-permeability (preset drag k0)";
-  metrics["viscosity_law"] = "newtonian";
+  metrics["viscosity_law"] = scene.viscosityLaw;
+  {
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (std::size_t c = 0; c < m.count(); ++c)
+      if (filling.filled(c)) {
+        lo = std::min(lo, filling.viscosity()[c]);
+        hi = std::max(hi, filling.viscosity()[c]);
+      }
+    metrics["apparent_viscosity_min_pa_s"] = std::isfinite(lo) ? lo : 0.0;
+    metrics["apparent_viscosity_max_pa_s"] = hi;
+    metrics["curing_factor_at_end"] = scene.curingFactor(filling.time());
+  }
   metrics["dimensionless_numbers"] = in.choice.numbersJson();
   metrics["pressure_is_physical"] = true;
   metrics["pore_permeability_m2"] = poreK;
@@ -357,7 +399,7 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
                                       : 0.0;
   metrics["fluid_in_solid_fraction"] = 0.0; // closed voxels never take cement
   metrics["simulated_ct_hu_per_relative_density"] = o.huPerRelativeDensity;
-  metrics["final_viscosity_pa_s"] = viscosity.at(filling.time());
+  metrics["final_viscosity_pa_s"] = std::clamp(scene.curingFactor(filling.time()) * viscosity.at(filling.time()), lower, upper);
 
   InjectionRunResult result;
   result.particles = cementVoxelsToPolyData(filling, rho0);

@@ -1,5 +1,7 @@
 #include "cementsph/scene/SceneConfig.h"
 
+#include "cementsph/sph/TubeFlow.h"
+
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/Presets.h"
 
@@ -128,6 +130,32 @@ void applySceneJson(SceneConfig& s, const json& j) {
       s.porePermeabilityM2 = number(v, key);
     } else if (key == "capillary_tension_n_per_m") {
       s.capillaryTensionNPerM = number(v, key);
+    } else if (key == "viscosity_law") {
+      s.viscosityLaw = text(v, key);
+      if (s.viscosityLaw != "newtonian" && s.viscosityLaw != "power-law" && s.viscosityLaw != "carreau")
+        fail(key, "must be \"newtonian\", \"power-law\" or \"carreau\" (got \"" + s.viscosityLaw + "\")");
+    } else if (key == "consistency_pa_s_n") s.rheology.consistencyPaSn = number(v, key);
+    else if (key == "flow_index") s.rheology.flowIndex = number(v, key);
+    else if (key == "zero_shear_viscosity_pa_s") s.rheology.zeroShearViscosityPaS = number(v, key);
+    else if (key == "infinite_shear_viscosity_pa_s") s.rheology.infiniteShearViscosityPaS = number(v, key);
+    else if (key == "carreau_time_constant_s") s.rheology.timeConstantS = number(v, key);
+    else if (key == "viscosity_min_pa_s") s.rheology.minimumViscosityPaS = number(v, key);
+    else if (key == "viscosity_max_pa_s") s.rheology.maximumViscosityPaS = number(v, key);
+    else if (key == "mixing_to_injection_s") s.mixingToInjectionS = number(v, key);
+    else if (key == "curing_table") {
+      if (!v.is_array() || v.empty()) fail(key, "must be a non-empty array of [t_since_mixing_s, factor] pairs");
+      s.curingTable.clear();
+      for (const json& row : v) {
+        if (!row.is_array() || row.size() != 2) fail(key, "must be a non-empty array of [t_since_mixing_s, factor] pairs");
+        s.curingTable.emplace_back(number(row[0], key), number(row[1], key));
+      }
+    } else if (key == "cannula_gauge") {
+      s.cannulaGauge = text(v, key);
+      try {
+        s.cannulaInnerDiameterMm = sph::cannulaInnerDiameterMm(*s.cannulaGauge);
+      } catch (const std::invalid_argument& e) {
+        fail(key, e.what());
+      }
     } else
       throw std::invalid_argument("scene: unknown key '" + key + "'");
   }
@@ -174,6 +202,16 @@ void SceneConfig::validate() const {
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
   requirePositive(solidMassFactor, "solid_mass_factor");
   if (porePermeabilityM2) requirePositive(*porePermeabilityM2, "pore_permeability_m2");
+  try {
+    (void)sph::makeRheology(viscosityLaw, rheology);
+  } catch (const std::invalid_argument& e) {
+    fail("viscosity_law", e.what());
+  }
+  if (!(mixingToInjectionS >= 0) || !std::isfinite(mixingToInjectionS)) fail("mixing_to_injection_s", "must be >= 0 s");
+  for (std::size_t k = 0; k < curingTable.size(); ++k) {
+    if (!(curingTable[k].second > 0) || !std::isfinite(curingTable[k].second)) fail("curing_table", "factors must be > 0");
+    if (k > 0 && !(curingTable[k].first > curingTable[k - 1].first)) fail("curing_table", "times must increase strictly");
+  }
   if (!(capillaryTensionNPerM >= 0) || !std::isfinite(capillaryTensionNPerM) || capillaryTensionNPerM > 1.0)
     fail("capillary_tension_n_per_m", "must be in [0, 1] N/m (0: no capillary entry)");
   if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
@@ -224,6 +262,19 @@ SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string
   }
 }
 
+double SceneConfig::curingFactor(double t) const {
+  if (curingTable.empty()) return 1.0;
+  const double since = mixingToInjectionS + t;
+  if (since <= curingTable.front().first) return curingTable.front().second;
+  for (std::size_t k = 1; k < curingTable.size(); ++k)
+    if (since <= curingTable[k].first) {
+      const auto& [t0, f0] = curingTable[k - 1];
+      const auto& [t1, f1] = curingTable[k];
+      return f0 + (f1 - f0) * (since - t0) / (t1 - t0);
+    }
+  return curingTable.back().second;
+}
+
 json toJson(const SceneConfig& s) {
   json j;
   j["scene_preset"] = s.scenePreset;
@@ -258,6 +309,24 @@ json toJson(const SceneConfig& s) {
   j["pressure_model"] = s.pressureModel;
   if (s.porePermeabilityM2) j["pore_permeability_m2"] = *s.porePermeabilityM2;
   j["capillary_tension_n_per_m"] = s.capillaryTensionNPerM;
+  j["viscosity_law"] = s.viscosityLaw;
+  if (s.viscosityLaw == "power-law") {
+    j["consistency_pa_s_n"] = s.rheology.consistencyPaSn;
+    j["flow_index"] = s.rheology.flowIndex;
+  } else if (s.viscosityLaw == "carreau") {
+    j["zero_shear_viscosity_pa_s"] = s.rheology.zeroShearViscosityPaS;
+    j["infinite_shear_viscosity_pa_s"] = s.rheology.infiniteShearViscosityPaS;
+    j["carreau_time_constant_s"] = s.rheology.timeConstantS;
+    j["flow_index"] = s.rheology.flowIndex;
+  }
+  j["viscosity_min_pa_s"] = s.rheology.minimumViscosityPaS;
+  j["viscosity_max_pa_s"] = s.rheology.maximumViscosityPaS;
+  j["mixing_to_injection_s"] = s.mixingToInjectionS;
+  if (!s.curingTable.empty()) {
+    j["curing_table"] = json::array();
+    for (const auto& [t, f] : s.curingTable) j["curing_table"].push_back({t, f});
+  }
+  if (s.cannulaGauge) j["cannula_gauge"] = *s.cannulaGauge;
   return j;
 }
 

@@ -37,6 +37,14 @@
 //                                   equation-of-state the paper's Eq. 6; auto chooses from the scene's
 //                                   dimensionless numbers (ModelSelection.h)                 auto
 //   pore_permeability_m2            voxel-darcy: permeability of a resolved pore voxel   preset drag k0 = h^5/(Cf d^3)
+//   viscosity_law "newtonian"|"power-law"|"carreau"   voxel-darcy: the cement's law (sph/Viscosity/)   newtonian
+//   consistency_pa_s_n, flow_index  power law mu = K gamma_dot^(n-1) (and n for Carreau)        100, 1
+//   zero_shear_viscosity_pa_s, infinite_shear_viscosity_pa_s, carreau_time_constant_s   Carreau   100, 0, 1
+//   viscosity_min_pa_s, viscosity_max_pa_s   bounds of the apparent viscosity                1e-3, 1e6
+//   mixing_to_injection_s           time from mixing to the start of injection                 0
+//   curing_table [[t_s, factor]]    viscosity factor over time since mixing (piecewise linear; held outside
+//                                   the table), multiplying any law                            none (1)
+//   cannula_gauge "8G".."13G"       sets cannula_inner_diameter_mm from the gauge table (TubeFlow.h)
 //   capillary_tension_n_per_m       voxel-darcy: interfacial tension sigma of cement against the displaced
 //                                   fluid; > 0 gives each pore voxel a capillary entry pressure 2 sigma / r
 //                                   (r its distance to the solid; VALIDATION.md, the viscosity trend)     0 (off)
@@ -45,6 +53,7 @@
 #pragma once
 
 #include "cementsph/sph/ModelParameters.h"
+#include "cementsph/sph/Viscosity/Rheology.h"
 #include "cementsph/sph/ViscositySchedule.h"
 
 #include <Eigen/Core>
@@ -84,6 +93,14 @@ struct SceneConfig {
   std::string pressureModel = "auto";
   std::optional<double> porePermeabilityM2; // voxel-darcy: permeability of a resolved pore voxel [m^2]
   double capillaryTensionNPerM = 0.0;       // voxel-darcy: capillary entry 2 sigma / r at the front; 0 off
+  // Rheology (voxel-darcy; sph::Rheology): the law, its parameters (the Newtonian law takes the viscosity
+  // schedule above), bounds, and the curing factor over time since mixing.
+  std::string viscosityLaw = "newtonian";
+  sph::RheologyParameters rheology;
+  double mixingToInjectionS = 0.0;
+  std::vector<std::pair<double, double>> curingTable; // (time since mixing [s], viscosity factor); empty: 1
+  std::optional<std::string> cannulaGauge;
+  double curingFactor(double timeSinceInjectionStartS) const;
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
