@@ -3,6 +3,8 @@
 // misalignment (registered away) and how each CT's cement is segmented: the surfaces should agree within
 // about one voxel diagonal (0.83 mm at 0.47 x 0.47 x 0.5 mm) and overlap with Dice >= 0.8.
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include <cstdlib>
@@ -111,4 +113,25 @@ TEST(ViscosityCommand, Eq13BothWays) {
   ASSERT_EQ(mu.first, 0);
   EXPECT_NEAR(mu.second, 100.0, 0.05);
   EXPECT_NE(run("--viscosity-pa-s 100 --pressure-drop-mpa 1").first, 0); // both: a clear error
+}
+
+TEST(ViscosityCommand, PowerLawDropAsJsonAndConsistencyBack) {
+  // Rabinowitsch-Mooney for a power law, written out: dp = 2 K L / R ((3n+1)/n Q / (pi R^3))^n; 13G (1.803 mm).
+  const fs::path log = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "viscosity-power.json";
+  fs::create_directories(log.parent_path());
+  auto run = [&](const std::string& args) {
+    const int status = std::system((std::string(CEMENTSPH_EXECUTABLE) + " viscosity --json " + args + " > " + log.string() + " 2>/dev/null").c_str());
+    std::ifstream in(log);
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, nlohmann::json::parse(in, nullptr, false));
+  };
+  const double K = 250, n = 0.5, L = 0.09, Q = 0.05e-6, R = 0.5 * 1.803e-3, pi = 3.14159265358979323846;
+  const double expected = 2 * K * L / R * std::pow((3 * n + 1) / n * Q / (pi * R * R * R), n);
+  const auto drop = run("--consistency-pa-s-n 250 --flow-index 0.5 --cannula-gauge 13G");
+  ASSERT_EQ(drop.first, 0);
+  EXPECT_NEAR(drop.second.at("pressure_drop_pa").get<double>() / expected, 1.0, 1e-9);
+  EXPECT_EQ(drop.second.at("law"), "power-law");
+  const auto back = run("--pressure-drop-mpa " + std::to_string(expected * 1e-6) + " --flow-index 0.5 --cannula-gauge 13G");
+  ASSERT_EQ(back.first, 0);
+  EXPECT_NEAR(back.second.at("consistency_pa_s_n").get<double>(), 250.0, 1e-3);
+  EXPECT_NE(run("--consistency-pa-s-n 250").first, 0); // no flow index: a clear error
 }

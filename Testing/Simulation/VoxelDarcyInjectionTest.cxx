@@ -96,3 +96,26 @@ TEST(VoxelDarcyInjection, PressureFollowsViscosityAndTheCementKeepsItsVolumeAndI
   for (vtkIdType i = 0; i < v->GetNumberOfTuples(); ++i) volumeMm3 += v->GetTuple1(i);
   EXPECT_NEAR(volumeMm3, 300.0, 1e-6);
 }
+
+TEST(VoxelDarcyInjection, APowerLawOfIndexOneIsTheNewtonianRunAndTheKeysAreChecked) {
+  const nlohmann::json base{{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.1}, {"snapshot_interval_s", 10.0}, {"cannula_length_mm", 5}};
+  const InjectionRunResult newtonian = runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(base), {});
+  nlohmann::json pl = base;
+  pl["viscosity_law"] = "power-law";
+  pl["consistency_pa_s_n"] = 100.0;
+  pl["flow_index"] = 1.0;
+  const InjectionRunResult power = runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(pl), {});
+  for (const char* key : {"final_tip_pressure_pa", "cannula_pressure_drop_pa", "mean_spreading_distance_mm"})
+    EXPECT_NEAR(power.metrics[key].get<double>(), newtonian.metrics[key].get<double>(),
+                1e-9 * std::abs(newtonian.metrics[key].get<double>())) << key;
+  EXPECT_EQ(power.metrics["viscosity_law"], "power-law");
+  // A law the particle models do not have, and parameters out of range: one clear error each.
+  nlohmann::json eos = pl;
+  eos["pressure_model"] = "equation-of-state";
+  EXPECT_THROW(runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(eos), {}), std::invalid_argument);
+  pl["flow_index"] = -1.0;
+  EXPECT_THROW(sceneFromJson(pl), std::invalid_argument);
+  pl["flow_index"] = 0.5;
+  pl["cannula_gauge"] = "99G";
+  EXPECT_THROW(sceneFromJson(pl), std::invalid_argument);
+}
