@@ -1,9 +1,23 @@
 #include "InjectionOutputs.h"
 
+#include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/PolyDataIO.h"
+#include "cementsph/imaging/VolumeIO.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
 #include <iomanip>
+#include <iostream>
 #include <sstream>
 
 namespace cementsph::scene::detail {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
 
 std::string particleCollection(const std::vector<std::pair<double, std::string>>& snapshots) {
   std::ostringstream pvd;
@@ -19,9 +33,104 @@ std::string tipPressureCsv(const std::vector<TipRecord>& series, std::optional<d
   csv << "time_s,pressure_pa,pressure_minus_baseline_pa,cannula_pressure_drop_pa,injection_pressure_pa\n"
       << std::setprecision(10);
   for (const auto& s : series)
-    csv << s.time << "," << s.tipPa << "," << (baselinePa ? s.tipPa - *baselinePa : 0.0) << "," << s.cannulaPa << "," << s.tipPa + s.cannulaPa
-        << "\n";
+    csv << s.time << "," << s.tipPa << "," << (baselinePa ? s.tipPa - *baselinePa : 0.0) << "," << s.cannulaPa << ","
+        << s.tipPa + s.cannulaPa << "\n";
   return csv.str();
+}
+
+InjectionWriter::InjectionWriter(std::string outDir, const SceneConfig& scene, double huPerRelativeDensity,
+                                 SimulatedCt simulatedCt)
+    : outDir_(std::move(outDir)), scene_(scene), huPerRelativeDensity_(huPerRelativeDensity),
+      simulatedCt_(std::move(simulatedCt)) {
+  if (!writing()) return;
+  fs::create_directories(outDir_);
+  // An earlier run's temporaries and snapshots must not mix with this run's (AtomicFile.h).
+  imaging::removeStaleOutputs(outDir_, {"particles_####.vtp", "simulated_ct_####.nrrd", "simulated_ct_start.nrrd",
+                                        "sequence.json"});
+  ctSnapshots_ = scene.simulatedCtSnapshots;
+  if (ctSnapshots_) ctFrame(0.0, "simulated_ct_start.nrrd", "", nullptr);
+}
+
+void InjectionWriter::ctFrame(double time, const std::string& ctName, const std::string& particlesName,
+                              const imaging::ImageType* now) {
+  const auto t0 = std::chrono::steady_clock::now();
+  imaging::ImageType::Pointer made;
+  if (!now) made = simulatedCt_();
+  imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(outDir_) / ctName).string());
+  ctSnapshotWallS_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ctFrames_.push_back({{"index", ctFrames_.size()}, {"time_s", time}, {"simulated_ct", ctName},
+                       {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
+}
+
+void InjectionWriter::snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow) {
+  if (!writing()) return;
+  char name[64];
+  std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots_.size());
+  imaging::writePolyData(particles, (fs::path(outDir_) / name).string());
+  if (ctSnapshots_) {
+    char ctName[64];
+    std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots_.size());
+    ctFrame(time, ctName, name, ctNow);
+  }
+  snapshots_.emplace_back(time, name);
+}
+
+void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,
+                             const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, json& metrics) {
+  if (!writing()) return;
+  snapshot(time, particles, simulatedCt);
+  const fs::path out(outDir_);
+  imaging::writeTextAtomically((out / "particles.pvd").string(), particleCollection(snapshots_));
+  imaging::writeTextAtomically((out / "tip_pressure.csv").string(), tipPressureCsv(tipSeries, baselinePa));
+  imaging::writeVolume(simulatedCt, (out / "simulated_ct.nrrd").string());
+  imaging::writeTextAtomically((out / "scene.json").string(), toJson(scene_).dump(2) + "\n");
+  metrics["snapshots"] = snapshots_.size();
+  if (ctSnapshots_) {
+    metrics["simulated_ct_snapshots"] = ctFrames_.size();
+    metrics["simulated_ct_snapshots_wall_s"] = ctSnapshotWallS_; // making and writing them
+    const json sequence{{"frames", ctFrames_},
+                        {"final_simulated_ct", "simulated_ct.nrrd"},
+                        {"simulated_ct_hu_per_relative_density", huPerRelativeDensity_},
+                        {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the "
+                                 "last frame is simulated_ct.nrrd"}};
+    imaging::writeTextAtomically((out / "sequence.json").string(), sequence.dump(2) + "\n");
+  }
+  imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
+}
+
+InjectionProgress::InjectionProgress(const InjectionRunOptions& options, std::chrono::steady_clock::time_point start,
+                                     double durationS)
+    : options_(options), start_(start), duration_(durationS), tty_(options.progress && isatty(STDERR_FILENO)) {}
+
+double InjectionProgress::wallSeconds() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+bool InjectionProgress::step(double t, const std::function<std::string()>& state) {
+  auto number = [](double x, int precision) {
+    std::ostringstream s;
+    s << std::setprecision(precision) << x;
+    return s.str();
+  };
+  const double wall = wallSeconds();
+  const double fraction = std::min(1.0, t / duration_);
+  if (options_.progress && wall >= nextReport_) {
+    std::ostringstream line;
+    line << "inject: t " << number(t, 4) << " / " << number(duration_, 4) << " s, " << state();
+    if (tty_ && fraction > 0) line << ", ETA " << number(wall * (1 - fraction) / fraction, 3) << " s";
+    if (tty_) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
+    else std::cerr << line.str() << "\n";
+    nextReport_ = wall + (tty_ ? 1.0 : 30.0);
+  }
+  if (options_.onProgress && fraction >= nextFraction_) {
+    nextFraction_ = fraction + 0.01;
+    if (!options_.onProgress(fraction)) return false;
+  }
+  return true;
+}
+
+void InjectionProgress::done() const {
+  if (tty_) std::cerr << "\n";
 }
 
 } // namespace cementsph::scene::detail

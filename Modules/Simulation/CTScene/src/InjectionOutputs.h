@@ -1,7 +1,17 @@
-// Pieces of an injection's output that both runners write the same way (InjectionRunner.h): the ParaView
-// series of the snapshots and the outlet-pressure table.
+// The files of an injection (InjectionRunner.h), written the same way by both runners (the particle path in
+// InjectionRunner.cpp, the voxel-grid path in VoxelDarcyInjection.cpp).
 #pragma once
 
+#include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/scene/InjectionRunner.h"
+#include "cementsph/scene/SceneConfig.h"
+
+#include <nlohmann/json.hpp>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
+#include <chrono>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,5 +30,56 @@ std::string particleCollection(const std::vector<std::pair<double, std::string>>
 // tip_pressure.csv. `baselinePa` is subtracted in pressure_minus_baseline_pa (0 where the pressure is physical);
 // none (a model pressure whose baseline is not known yet): that column is 0.
 std::string tipPressureCsv(const std::vector<TipRecord>& series, std::optional<double> baselinePa);
+
+// The snapshots and the final files in outDir; with an empty outDir it writes nothing. Construction creates
+// the folder, removes an earlier run's temporaries and numbered snapshots (AtomicFile.h) and, with the
+// scene's simulated_ct_snapshots, writes simulated_ct_start.nrrd (t = 0, no cement: an X-ray sequence's
+// background).
+class InjectionWriter {
+public:
+  using SimulatedCt = std::function<imaging::ImageType::Pointer()>; // the simulated CT of the state now
+  InjectionWriter(std::string outDir, const SceneConfig& scene, double huPerRelativeDensity, SimulatedCt simulatedCt);
+
+  bool writing() const { return !outDir_.empty(); }
+  // particles_NNNN.vtp (and simulated_ct_NNNN.nrrd: `ctNow` if given, else made) at time [s].
+  void snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow = nullptr);
+  // The last snapshot (the final state), particles.pvd, tip_pressure.csv, simulated_ct.nrrd, scene.json,
+  // sequence.json, then metrics.json (with the snapshot counts added).
+  void finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,
+              const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, nlohmann::json& metrics);
+
+private:
+  void ctFrame(double time, const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now);
+
+  std::string outDir_;
+  const SceneConfig& scene_;
+  double huPerRelativeDensity_;
+  SimulatedCt simulatedCt_;
+  bool ctSnapshots_ = false;
+  nlohmann::json ctFrames_ = nlohmann::json::array();
+  double ctSnapshotWallS_ = 0.0;
+  std::vector<std::pair<double, std::string>> snapshots_;
+};
+
+// The progress of a run: a line on stderr now and then (every second with an ETA on a terminal, every 30 s
+// otherwise) when options.progress, and the options' callback at the first step and every 1 % of the
+// injection time.
+class InjectionProgress {
+public:
+  InjectionProgress(const InjectionRunOptions& options, std::chrono::steady_clock::time_point start, double durationS);
+  // After a step that reached time t [s]; `state` says what the run holds ("674 fluid + ... , 812 steps").
+  // Returns false when the callback asks the run to stop.
+  bool step(double t, const std::function<std::string()>& state);
+  // Ends a terminal's progress line.
+  void done() const;
+  double wallSeconds() const;
+
+private:
+  const InjectionRunOptions& options_;
+  std::chrono::steady_clock::time_point start_;
+  double duration_;
+  bool tty_;
+  double nextReport_ = 0.0, nextFraction_ = 0.0;
+};
 
 } // namespace cementsph::scene::detail

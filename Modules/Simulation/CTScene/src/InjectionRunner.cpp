@@ -3,9 +3,6 @@
 #include "InjectionOutputs.h"
 #include "VoxelDarcyInjection.h"
 
-#include "cementsph/imaging/AtomicFile.h"
-#include "cementsph/imaging/PolyDataIO.h"
-#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/ModelSelection.h"
 #include "cementsph/scene/PorousSolid.h"
 #include "cementsph/scene/SimulatedCT.h"
@@ -22,20 +19,13 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <iomanip>
 #include <iostream>
 #include <limits>
-#include <sstream>
 
 namespace cementsph::scene {
 
-namespace fs = std::filesystem;
 using nlohmann::json;
 
 vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, double time) {
@@ -81,11 +71,6 @@ vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, d
 
 namespace {
 
-std::string fmt(double x, int precision = 4) {
-  std::ostringstream s;
-  s << std::setprecision(precision) << x;
-  return s.str();
-}
 
 double finiteOrZero(double x) { return std::isfinite(x) ? x : 0.0; }
 
@@ -189,48 +174,18 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   };
   json volumeHistory = json::array();
 
-  const bool writing = !o.outDir.empty();
-  if (writing) fs::create_directories(o.outDir);
-  // An earlier run's temporaries and snapshots must not mix with this run's (AtomicFile.h).
-  if (writing)
-    imaging::removeStaleOutputs(o.outDir, {"particles_####.vtp", "simulated_ct_####.nrrd", "simulated_ct_start.nrrd",
-                                           "sequence.json"});
   const sph::ParticleVoxeliser voxeliser(solid.grid, 2.0 * scene.particleRadiusMm * 1e-3); // h = 2r
-  // simulated_ct_snapshots: the simulated CT at t = 0 (no cement yet: the background of an X-ray sequence)
-  // and at every particle snapshot, listed with their times in sequence.json.
-  const bool ctSnapshots = writing && scene.simulatedCtSnapshots;
-  json ctFrames = json::array();
-  double ctSnapshotWallS = 0.0;
-  auto writeCtSnapshot = [&](const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now) {
-    const auto t0 = std::chrono::steady_clock::now();
-    imaging::ImageType::Pointer made;
-    if (!now) made = simulatedCtOnRoi(ct, solid, voxeliser.density(sim.fluid()), o.huPerRelativeDensity, rho0);
-    imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(o.outDir) / ctName).string());
-    ctSnapshotWallS += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ctFrames.push_back({{"index", ctFrames.size()}, {"time_s", sim.time()}, {"simulated_ct", ctName},
-                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
-  };
-  if (ctSnapshots) writeCtSnapshot("simulated_ct_start.nrrd", "", nullptr);
-  std::vector<std::pair<double, std::string>> snapshots;
-  auto writeSnapshot = [&](const imaging::ImageType* ctNow = nullptr) {
+  detail::InjectionWriter writer(o.outDir, scene, o.huPerRelativeDensity, [&] {
+    return simulatedCtOnRoi(ct, solid, voxeliser.density(sim.fluid()), o.huPerRelativeDensity, rho0);
+  });
+  auto writeSnapshot = [&]() {
     volumeHistory.push_back(volumeRecord());
-    if (!writing) return;
-    char name[64];
-    std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
-    imaging::writePolyData(particlesToPolyData(sim.fluid(), sim.time()), (fs::path(o.outDir) / name).string());
-    if (ctSnapshots) {
-      char ctName[64];
-      std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots.size());
-      writeCtSnapshot(ctName, name, ctNow);
-    }
-    snapshots.emplace_back(sim.time(), name);
+    if (writer.writing()) writer.snapshot(sim.time(), particlesToPolyData(sim.fluid(), sim.time()));
   };
 
   const double T = scene.injectionDurationS();
-  const bool tty = o.progress && isatty(STDERR_FILENO);
+  detail::InjectionProgress progress(o, wallStart, T);
   double nextSnapshot = scene.snapshotIntervalS;
-  double nextReport = 0.0; // wall seconds
-  double nextFraction = 0.0;
   bool stopped = false;
   while (sim.time() < T) {
     viscosity.apply(sim, spec.startTime);
@@ -246,30 +201,18 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
       writeSnapshot();
       while (nextSnapshot <= sim.time()) nextSnapshot += scene.snapshotIntervalS;
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
-    const double fraction = std::min(1.0, sim.time() / T);
-    if (o.progress && wall >= nextReport) {
-      std::ostringstream line;
-      line << "inject: t " << fmt(sim.time()) << " / " << fmt(T) << " s, " << sim.fluid().size() << " fluid + "
-           << sim.fixed().size() << " fixed particles, " << sim.statistics().steps << " steps";
-      if (tty && fraction > 0) line << ", ETA " << fmt(wall * (1 - fraction) / fraction, 3) << " s";
-      if (tty) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
-      else std::cerr << line.str() << "\n";
-      nextReport = wall + (tty ? 1.0 : 30.0);
-    }
-    // The callback: at the first step and every 1 % of the injection time.
-    if (o.onProgress && fraction >= nextFraction) {
-      nextFraction = fraction + 0.01;
-      if (!o.onProgress(fraction)) {
-        stopped = true;
-        break;
-      }
+    if (!progress.step(sim.time(), [&] {
+          return std::to_string(sim.fluid().size()) + " fluid + " + std::to_string(sim.fixed().size()) +
+                 " fixed particles, " + std::to_string(sim.statistics().steps) + " steps";
+        })) {
+      stopped = true;
+      break;
     }
   }
   if (!stopped) emitter.emit(sim); // the emission up to the end time
   sim.updateDensityAndPressure();
-  if (tty) std::cerr << "\n";
-  const double wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+  progress.done();
+  const double wallS = progress.wallSeconds();
 
   // Figures.
   const sph::FluidParticles& f = sim.fluid();
@@ -376,29 +319,10 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   InjectionRunResult result;
   result.particles = particlesToPolyData(f, sim.time());
   result.simulatedCt = simCt;
-  if (writing) {
-    writeSnapshot(simCt);
-    imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), detail::particleCollection(snapshots));
-    std::optional<double> csvBaseline;
-    if (incompressible) csvBaseline = 0.0;
-    else if (haveBaseline) csvBaseline = baseline;
-    imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(),
-                                 detail::tipPressureCsv(tipSeries, csvBaseline));
-    imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
-    imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");
-    metrics["snapshots"] = snapshots.size();
-    if (ctSnapshots) {
-      metrics["simulated_ct_snapshots"] = ctFrames.size();
-      metrics["simulated_ct_snapshots_wall_s"] = ctSnapshotWallS; // voxelising and writing them
-      const json sequence{{"frames", ctFrames},
-                          {"final_simulated_ct", "simulated_ct.nrrd"},
-                          {"simulated_ct_hu_per_relative_density", o.huPerRelativeDensity},
-                          {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the "
-                                   "last frame is simulated_ct.nrrd"}};
-      imaging::writeTextAtomically((fs::path(o.outDir) / "sequence.json").string(), sequence.dump(2) + "\n");
-    }
-    imaging::writeTextAtomically((fs::path(o.outDir) / "metrics.json").string(), metrics.dump(2) + "\n");
-  }
+  std::optional<double> csvBaseline; // the pressure itself where it is physical, else relative to the baseline
+  if (incompressible) csvBaseline = 0.0;
+  else if (haveBaseline) csvBaseline = baseline;
+  writer.finish(sim.time(), result.particles, simCt, tipSeries, csvBaseline, metrics);
   result.metrics = metrics;
   return result;
 }

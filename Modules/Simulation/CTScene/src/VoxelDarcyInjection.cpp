@@ -2,9 +2,6 @@
 
 #include "InjectionOutputs.h"
 
-#include "cementsph/imaging/AtomicFile.h"
-#include "cementsph/imaging/PolyDataIO.h"
-#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/SimulatedCT.h"
 #include "cementsph/sph/HagenPoiseuille.h"
 #include "cementsph/sph/Simulation.h"
@@ -18,21 +15,13 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <cstdio>
-#include <filesystem>
-#include <iomanip>
-#include <iostream>
-#include <sstream>
 
 namespace cementsph::scene::detail {
 
-namespace fs = std::filesystem;
 using nlohmann::json;
 using voxeldarcy::VoxelDarcyFilling;
 using voxeldarcy::VoxelMedium;
@@ -43,11 +32,6 @@ namespace {
 // inner 2.388 mm (ISO 9626).
 constexpr double kCannulaWallM = 0.33e-3;
 
-std::string fmt(double x, int precision = 4) {
-  std::ostringstream s;
-  s << std::setprecision(precision) << x;
-  return s.str();
-}
 
 // Capillary entry pressure of each pore voxel [Pa]: Young-Laplace for the cement entering a pore of the
 // local radius r as the non-wetting phase (cos theta = 1, the largest entry pressure), p_e = 2 sigma / r.
@@ -215,43 +199,17 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
     return rho;
   };
 
-  const bool writing = !o.outDir.empty();
-  if (writing) fs::create_directories(o.outDir);
-  if (writing)
-    imaging::removeStaleOutputs(o.outDir, {"particles_####.vtp", "simulated_ct_####.nrrd", "simulated_ct_start.nrrd",
-                                           "sequence.json"});
-  const bool ctSnapshots = writing && scene.simulatedCtSnapshots;
-  json ctFrames = json::array();
-  double ctSnapshotWallS = 0.0;
-  auto writeCtSnapshot = [&](const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now) {
-    const auto t0 = std::chrono::steady_clock::now();
-    imaging::ImageType::Pointer made;
-    if (!now) made = simulatedCtOnRoi(ct, solid, cementDensity(), o.huPerRelativeDensity, rho0);
-    imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(o.outDir) / ctName).string());
-    ctSnapshotWallS += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ctFrames.push_back({{"index", ctFrames.size()}, {"time_s", filling.time()}, {"simulated_ct", ctName},
-                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
-  };
-  if (ctSnapshots) writeCtSnapshot("simulated_ct_start.nrrd", "", nullptr);
-  std::vector<std::pair<double, std::string>> snapshots;
-  auto writeSnapshot = [&](const imaging::ImageType* ctNow = nullptr) {
+  InjectionWriter writer(o.outDir, scene, o.huPerRelativeDensity,
+                         [&] { return simulatedCtOnRoi(ct, solid, cementDensity(), o.huPerRelativeDensity, rho0); });
+  auto writeSnapshot = [&]() {
     volumeHistory.push_back(volumeRecord());
-    if (!writing) return;
-    char name[64];
-    std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots.size());
-    imaging::writePolyData(cementVoxelsToPolyData(filling, rho0), (fs::path(o.outDir) / name).string());
-    if (ctSnapshots) {
-      char ctName[64];
-      std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots.size());
-      writeCtSnapshot(ctName, name, ctNow);
-    }
-    snapshots.emplace_back(filling.time(), name);
+    if (writer.writing()) writer.snapshot(filling.time(), cementVoxelsToPolyData(filling, rho0));
   };
 
   const double T = scene.injectionDurationS();
   const double endTime = T * (1 - 1e-12);
-  const bool tty = o.progress && isatty(STDERR_FILENO);
-  double nextSnapshot = scene.snapshotIntervalS, nextReport = 0.0, nextFraction = 0.0;
+  InjectionProgress progress(o, in.wallStart, T);
+  double nextSnapshot = scene.snapshotIntervalS;
   bool stopped = false;
   try {
     while (filling.time() < endTime) {
@@ -272,30 +230,19 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
         writeSnapshot();
         while (nextSnapshot <= filling.time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
       }
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - in.wallStart).count();
-      const double fraction = std::min(1.0, filling.time() / T);
-      if (o.progress && wall >= nextReport) {
-        std::ostringstream line;
-        line << "inject: t " << fmt(filling.time()) << " / " << fmt(T) << " s, " << filling.statistics().lastUnknowns
-             << " filled voxels, " << filling.statistics().steps << " steps";
-        if (tty && fraction > 0) line << ", ETA " << fmt(wall * (1 - fraction) / fraction, 3) << " s";
-        if (tty) std::cerr << "\r" << line.str() << "\033[K" << std::flush;
-        else std::cerr << line.str() << "\n";
-        nextReport = wall + (tty ? 1.0 : 30.0);
-      }
-      if (o.onProgress && fraction >= nextFraction) {
-        nextFraction = fraction + 0.01;
-        if (!o.onProgress(fraction)) {
-          stopped = true;
-          break;
-        }
+      if (!progress.step(filling.time(), [&] {
+            return std::to_string(filling.statistics().lastUnknowns) + " filled voxels, " +
+                   std::to_string(filling.statistics().steps) + " steps";
+          })) {
+        stopped = true;
+        break;
       }
     }
   } catch (const voxeldarcy::FillingError& e) {
     throw sph::SimulationError(e.what()); // a failed run, as an unstable particle run
   }
-  if (tty) std::cerr << "\n";
-  const double wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - in.wallStart).count();
+  progress.done();
+  const double wallS = progress.wallSeconds();
 
   // Figures.
   const VoxelMedium& m = filling.medium();
@@ -404,25 +351,7 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   InjectionRunResult result;
   result.particles = cementVoxelsToPolyData(filling, rho0);
   result.simulatedCt = simCt;
-  if (writing) {
-    writeSnapshot(simCt);
-    imaging::writeTextAtomically((fs::path(o.outDir) / "particles.pvd").string(), particleCollection(snapshots));
-    imaging::writeTextAtomically((fs::path(o.outDir) / "tip_pressure.csv").string(), tipPressureCsv(tipSeries, 0.0));
-    imaging::writeVolume(simCt, (fs::path(o.outDir) / "simulated_ct.nrrd").string());
-    imaging::writeTextAtomically((fs::path(o.outDir) / "scene.json").string(), toJson(scene).dump(2) + "\n");
-    metrics["snapshots"] = snapshots.size();
-    if (ctSnapshots) {
-      metrics["simulated_ct_snapshots"] = ctFrames.size();
-      metrics["simulated_ct_snapshots_wall_s"] = ctSnapshotWallS;
-      const json sequence{{"frames", ctFrames},
-                          {"final_simulated_ct", "simulated_ct.nrrd"},
-                          {"simulated_ct_hu_per_relative_density", o.huPerRelativeDensity},
-                          {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the "
-                                   "last frame is simulated_ct.nrrd"}};
-      imaging::writeTextAtomically((fs::path(o.outDir) / "sequence.json").string(), sequence.dump(2) + "\n");
-    }
-    imaging::writeTextAtomically((fs::path(o.outDir) / "metrics.json").string(), metrics.dump(2) + "\n");
-  }
+  writer.finish(filling.time(), result.particles, simCt, tipSeries, 0.0, metrics);
   result.metrics = metrics;
   return result;
 }
