@@ -105,11 +105,13 @@ int runDemo(const DemoOptions& o) {
   const nlohmann::json xray = readJson(out / "xray" / "metrics.json");
 
   std::cerr << "demo 4/4: summary\n";
-  std::error_code ec;
-  fs::copy_file(out / "inject" / "tip_pressure.png", out / "tip_pressure.png", fs::copy_options::overwrite_existing, ec);
-  if (ec) {
-    std::cerr << "cementsph demo: picture tip_pressure.png not copied: " << ec.message() << "\n";
-    status = 3;
+  for (const char* picture : {"tip_pressure.png", "injection_pressure.png"}) {
+    std::error_code ec;
+    fs::copy_file(out / "inject" / picture, out / picture, fs::copy_options::overwrite_existing, ec);
+    if (ec) {
+      std::cerr << "cementsph demo: picture " << picture << " not copied: " << ec.message() << "\n";
+      status = 3;
+    }
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   nlohmann::json metrics;

@@ -2,7 +2,8 @@
 // above threshold_hu near the pores become fixed particles; cement is emitted at the cannula tip until the
 // scene's volume is in. Writes DIR/metrics.json, tip_pressure.csv, particles_NNNN.vtp + particles.pvd,
 // simulated_ct.nrrd and scene.json (Modules/Simulation/CTScene/.../InjectionRunner.h; docs/scene-figures.md),
-// then the pictures that fit an injection: tip_pressure.png (paper Fig. 10) and, when the scene key
+// then the pictures that fit an injection: tip_pressure.png (paper Fig. 10), injection_pressure.png (syringe,
+// cannula and outlet pressures over time) and, when the scene key
 // simulated_ct_snapshots is on, the X-ray sequence of the snapshots in DIR/xray (`cementsph xray`, Fig. 12).
 // A failed picture is one line on stderr and exit status 3 (the numbers are written), as in `compare`.
 #include "CommandRegistry.h"
@@ -49,7 +50,7 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   sub.add_flag("--allow-large", a->allowLarge,
                "Run even when the estimated work is hours (or memory over half the RAM); docs: README 'Bad input'");
   sub.add_flag("--no-pictures", a->noPictures,
-               "Do not write tip_pressure.png (Fig. 10) nor, with simulated_ct_snapshots, the X-ray sequence "
+               "Do not write tip_pressure.png (Fig. 10), injection_pressure.png nor, with simulated_ct_snapshots, the X-ray sequence "
                "in DIR/xray (Fig. 12)");
   return [a, &sub]() {
     // Flags given on the command line override the scene file (and --set), in this order.
@@ -90,6 +91,10 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
     picture("tip_pressure.png", [&] {
       cementsph::rendering::writeTipPressurePlot(out / "tip_pressure.csv", out / "tip_pressure.png");
       std::cout << "wrote " << (out / "tip_pressure.png").string() << "\n";
+    });
+    picture("injection_pressure.png", [&] {
+      cementsph::rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", out / "injection_pressure.png");
+      std::cout << "wrote " << (out / "injection_pressure.png").string() << "\n";
     });
     if (scene.simulatedCtSnapshots)
       picture("xray/", [&] {

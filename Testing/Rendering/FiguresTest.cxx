@@ -234,3 +234,29 @@ TEST(TipPressurePlot, BadCsvThrowsAndLeavesNoPicture) {
   ASSERT_EQ(series.timeS.size(), 2u);
   EXPECT_DOUBLE_EQ(series.pressureMinusBaselinePa[1], 200.0);
 }
+
+TEST(InjectionPressurePlot, ReadsTheSyringeColumnsAndDrawsThem) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  // The five columns inject writes: tip, baseline-free tip, cannula drop, syringe (= cannula + tip).
+  {
+    std::ofstream out(dir / "five.csv");
+    out.precision(17);
+    out << "time_s,pressure_pa,pressure_minus_baseline_pa,cannula_pressure_drop_pa,injection_pressure_pa\n";
+    for (int i = 0; i <= 100; ++i) {
+      const double t = 0.2 * i, tip = 8000.0 * (1.0 - std::exp(-t)), cannula = 5.6e5 + 100.0 * t;
+      out << t << "," << tip << "," << tip << "," << cannula << "," << tip + cannula << "\n";
+    }
+  }
+  const TipPressureSeries s = readTipPressureCsv(dir / "five.csv");
+  ASSERT_EQ(s.injectionPa.size(), 101u);
+  EXPECT_NEAR(s.cannulaPa[50], 5.6e5 + 1000.0, 1e-6);
+  EXPECT_NEAR(s.injectionPa[100] - s.cannulaPa[100], 8000.0 * (1.0 - std::exp(-20.0)), 1e-6);
+  writeInjectionPressurePlot(dir / "five.csv", dir / "injection.png");
+  expectNotBlank(dir / "injection.png", 900, 650, 20);
+  // A three-column CSV (the paper's model without a cannula column) has no syringe pressure to draw.
+  writePressureCsv(dir / "three.csv", 1.0);
+  EXPECT_TRUE(readTipPressureCsv(dir / "three.csv").injectionPa.empty());
+  EXPECT_THROW(writeInjectionPressurePlot(dir / "three.csv", dir / "none.png"), std::runtime_error);
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
+}

@@ -39,14 +39,19 @@ TipPressureSeries readTipPressureCsv(const std::filesystem::path& csv) {
       header[2] != "pressure_minus_baseline_pa")
     throw std::runtime_error(csv.string() + ": header must be time_s,pressure_pa,pressure_minus_baseline_pa");
   TipPressureSeries s;
+  const bool pressures = header.size() >= 5 && header[3] == "cannula_pressure_drop_pa" &&
+                         header[4] == "injection_pressure_pa";
+  const int columns = pressures ? 5 : 3;
   int lineNo = 1;
   while (std::getline(in, line)) {
     ++lineNo;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const auto fields = splitCsv(line);
-    if (fields.size() < 3) throw std::runtime_error(csv.string() + ":" + std::to_string(lineNo) + ": fewer than 3 values");
-    double v[3];
-    for (int i = 0; i < 3; ++i) {
+    if (int(fields.size()) < columns)
+      throw std::runtime_error(csv.string() + ":" + std::to_string(lineNo) + ": fewer than " + std::to_string(columns) +
+                               " values");
+    double v[5];
+    for (int i = 0; i < columns; ++i) {
       char* end = nullptr;
       v[i] = std::strtod(fields[i].c_str(), &end);
       if (fields[i].empty() || end == nullptr || *end != '\0' || !std::isfinite(v[i]))
@@ -56,6 +61,10 @@ TipPressureSeries readTipPressureCsv(const std::filesystem::path& csv) {
     s.timeS.push_back(v[0]);
     s.pressurePa.push_back(v[1]);
     s.pressureMinusBaselinePa.push_back(v[2]);
+    if (pressures) {
+      s.cannulaPa.push_back(v[3]);
+      s.injectionPa.push_back(v[4]);
+    }
   }
   if (s.timeS.empty()) throw std::runtime_error(csv.string() + ": no data rows");
   return s;
@@ -77,6 +86,31 @@ void writeTipPressurePlot(const std::filesystem::path& csv, const std::filesyste
   const auto& pa = options.minusBaseline ? data.pressureMinusBaselinePa : data.pressurePa;
   for (double p : pa) series.y.push_back(p / 1000.0);
   spec.series = {series};
+  writePlotPng(spec, png);
+}
+
+void writeInjectionPressurePlot(const std::filesystem::path& csv, const std::filesystem::path& png,
+                                const TipPressurePlotOptions& options) {
+  const TipPressureSeries data = readTipPressureCsv(csv);
+  if (data.injectionPa.empty())
+    throw std::runtime_error(csv.string() + ": no cannula_pressure_drop_pa and injection_pressure_pa columns");
+  PlotSpec spec;
+  spec.title = "Injection pressure: syringe, cannula and outlet";
+  spec.xLabel = "time (s)";
+  spec.yLabel = "pressure (kPa)";
+  spec.widthPx = options.widthPx;
+  spec.heightPx = options.heightPx;
+  auto curve = [&](const char* name, const std::vector<double>& pa, std::array<unsigned char, 3> rgb) {
+    PlotSeries series;
+    series.name = name;
+    series.rgb = rgb;
+    series.style = PlotSeries::Style::Line;
+    series.x = data.timeS;
+    for (double p : pa) series.y.push_back(p / 1000.0);
+    return series;
+  };
+  spec.series = {curve("syringe (cannula + outlet)", data.injectionPa, {31, 119, 180}),
+                 curve("cannula drop", data.cannulaPa, {255, 127, 14}), curve("outlet (tip)", data.pressurePa, {44, 160, 44})};
   writePlotPng(spec, png);
 }
 

@@ -9,6 +9,8 @@ namespace cementsph::rendering {
 
 struct TipPressureSeries {
   std::vector<double> timeS, pressurePa, pressureMinusBaselinePa;
+  // Columns 4 and 5 when the header names them (cannula_pressure_drop_pa, injection_pressure_pa); else empty.
+  std::vector<double> cannulaPa, injectionPa;
 };
 
 // Reads the CSV. The header must name the three columns in that order (extra columns after them are
@@ -26,5 +28,11 @@ struct TipPressurePlotOptions {
 // and the axis labels stay short). Errors as readTipPressureCsv() and writePlotPng().
 void writeTipPressurePlot(const std::filesystem::path& csv, const std::filesystem::path& png,
                           const TipPressurePlotOptions& options = {});
+
+// The pressures a planner reads over time, in kPa: at the syringe (injection_pressure_pa), the cannula's
+// drop and at the outlet (Fig. 10's curve). The CSV must have the two extra columns (std::runtime_error
+// otherwise, naming the file).
+void writeInjectionPressurePlot(const std::filesystem::path& csv, const std::filesystem::path& png,
+                                const TipPressurePlotOptions& options = {});
 
 } // namespace cementsph::rendering
