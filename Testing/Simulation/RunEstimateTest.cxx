@@ -50,4 +50,21 @@ TEST(RunEstimate, TinyDisplacementLimitIsRefusedUnlessAllowed) {
   EXPECT_NO_THROW(checkRunSize(e, true));
 }
 
+TEST(RunEstimate, TheVoxelGridDefaultIsEstimatedByItsVoxels) {
+  // The default scene is creeping flow: auto runs the voxel-grid Darcy filling. A 40 mm cube of 0.5 mm^3
+  // voxels: 128000 voxels (160 bytes each: 20.48 MB); 1 ml fills at least 1000 / 0.5 = 2000 of them.
+  const RunEstimate e = estimateRun(scene(0.5), 0.5);
+  ASSERT_TRUE(e.voxelDarcy);
+  EXPECT_NEAR(e.voxels, 128000.0, 1e-6);
+  EXPECT_NEAR(e.cementVoxels, 2000.0, 1e-9);
+  EXPECT_NEAR(e.voxelMemoryBytes, 160.0 * 128000.0, 1e-3);
+  EXPECT_EQ(checkRunSize(e, false), ""); // seconds, not worth a note
+  // 200 ml is long in particle steps (1.6e5 particles emitted one per step) but not for the voxel model.
+  SceneConfig big = scene(0.57);
+  big.volumeMl = 200;
+  EXPECT_NO_THROW(checkRunSize(estimateRun(big, 0.1), false));
+  big.pressureModel = "equation-of-state";
+  EXPECT_THROW(checkRunSize(estimateRun(big, 0.1), false), std::invalid_argument);
+}
+
 } // namespace

@@ -1,5 +1,6 @@
 #include "cementsph/scene/RunEstimate.h"
 
+#include "cementsph/scene/ModelSelection.h"
 #include "cementsph/sph/Presets.h"
 
 #include <unistd.h>
@@ -23,6 +24,12 @@ constexpr double kBytesPerFieldNode = 32, kFieldVolumeOverCementVolume = 4;
 // kept the other core busy): 816 steps x 674/2 fluid particles in 7.55 s = 3.6e4 per second. A slow,
 // loaded machine on purpose: the estimate should not promise less time than a run takes.
 constexpr double kParticleStepsPerSecond = 3.6e4;
+// The voxel-grid Darcy filling: its arrays (VoxelDarcyFilling.h: porosity, permeability, state, fill,
+// pressure, viscosity, arrival, face fluxes, numbering; the ROI's solid mask, kept solid centres and the
+// simulated CT) are about 160 bytes per ROI voxel. Its work: about max(100, 3 n^(1/3)) pressure solves for
+// n cement voxels (139 for the 5 ml phantom scene, 47 600 voxels), each ~100 CG iterations over half of them
+// on average; measured 3.5e8 voxel-iterations in 2.64 s (1.3e8 per second, one core with the other busy).
+constexpr double kBytesPerVoxel = 160, kVoxelIterationsPerSecond = 1.3e8;
 // InjectionRunner's overdamped move limit when the scene does not set max_displacement_over_h.
 constexpr double kDefaultMaxDisplacementOverH = 0.25;
 
@@ -86,6 +93,15 @@ RunEstimate estimateRun(const SceneConfig& scene, double voxelVolumeMm3) {
     const double node = scene.fixedFieldSpacingOverH.value_or(preset.model.fixedFieldSpacing) * h;
     e.memoryBytes += kFieldVolumeOverCementVolume * scene.volumeMl * 1e3 / (node * node * node) * kBytesPerFieldNode;
   }
+  const double cs = scene.soundSpeedMPerS.value_or(preset.model.soundSpeed);
+  e.voxelDarcy = chooseModel(scene, preset.model.restDensity, cs, 1.0).pressureModel == "voxel-darcy";
+  if (e.voxelDarcy && voxelVolumeMm3 > 0) {
+    e.voxels = std::pow(scene.roiSizeMm, 3) / voxelVolumeMm3;
+    e.cementVoxels = scene.volumeMl * 1e3 / voxelVolumeMm3;
+    const double solves = std::max(100.0, 3.0 * std::cbrt(e.cementVoxels));
+    e.voxelSeconds = solves * 100.0 * 0.5 * e.cementVoxels / kVoxelIterationsPerSecond;
+    e.voxelMemoryBytes = e.voxels * kBytesPerVoxel;
+  }
   return e;
 }
 
@@ -98,10 +114,24 @@ std::string checkRunSize(const RunEstimate& e, bool allowLarge) {
     throw std::invalid_argument("scene: this run needs about " + number(e.memoryBytes / 1e9) + " GB (" + counts +
                                 ") and the machine has " + number(ram / 1e9) + " GB: raise particle_radius_mm" +
                                 (allowLarge ? "" : " (or pass --allow-large to use up to all of the memory)"));
-  if (e.estimatedWallSeconds() > kMaxEstimatedSeconds && !allowLarge)
+  // The particle model's time limits a voxel-grid run only through a key whose value is absurd for any
+  // model (a move limit of 1e-9 h is a mistake, not a plan); the volume or radius of a voxel run does not
+  // make it long in particle steps.
+  const bool particleTimeApplies = !e.voxelDarcy || e.drivingKey == "max_displacement_over_h";
+  if (particleTimeApplies && e.estimatedWallSeconds() > kMaxEstimatedSeconds && !allowLarge)
     throw std::invalid_argument("scene: key '" + e.drivingKey + "' makes this run about " + number(e.steps) +
                                 " steps over " + counts + ", some " + duration(e.estimatedWallSeconds()) +
                                 ": raise it, or pass --allow-large to run it anyway");
+  if (e.voxelMemoryBytes > (allowLarge ? 1.0 : 0.5) * ram)
+    throw std::invalid_argument("scene: this run needs about " + number(e.voxelMemoryBytes / 1e9) + " GB for " +
+                                number(e.voxels) + " voxels of the region and the machine has " + number(ram / 1e9) +
+                                " GB: lower roi_size_mm" + (allowLarge ? "" : " (or pass --allow-large to use up to all of the memory)"));
+  if (e.voxelDarcy) {
+    if (e.voxelSeconds > kNoteEstimatedSeconds)
+      return "note: a large run, about " + number(e.cementVoxels) + " cement voxels in a region of " +
+             number(e.voxels) + ": expect " + duration(e.voxelSeconds) + " or more";
+    return {};
+  }
   if (e.estimatedWallSeconds() > kNoteEstimatedSeconds)
     return "note: a large run, about " + number(e.steps) + " steps over " + counts + ": expect " +
            duration(e.estimatedWallSeconds()) + " or more";

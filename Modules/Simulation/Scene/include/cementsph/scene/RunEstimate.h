@@ -23,6 +23,12 @@ struct RunEstimate {
   // Which scene key makes the run this large (for the message).
   std::string drivingKey;
   double estimatedWallSeconds() const;
+  // The voxel-grid Darcy filling (the creeping-flow default, ModelSelection.h), when the scene runs it: the
+  // ROI's voxels (an upper bound), the cement's voxels (volume over voxel volume, a lower bound), its memory
+  // and time. The particle figures above are still checked: a scene whose particle keys are absurd is bad
+  // input whichever model runs (the particle radius also sets the pore permeability k0 = h^5 / (Cf d^3)).
+  bool voxelDarcy = false;
+  double voxels = 0, cementVoxels = 0, voxelMemoryBytes = 0, voxelSeconds = 0;
 };
 
 // voxelVolumeMm3: the CT's voxel volume (0 when not known yet: the solid is then left out).
@@ -31,7 +37,8 @@ RunEstimate estimateRun(const SceneConfig& scene, double voxelVolumeMm3 = 0);
 // Limits: memory above half the machine's RAM (above all of it even with allowLarge), or an estimated wall
 // time over kMaxEstimatedSeconds, throws std::invalid_argument with one line (what, how much, which key to
 // change, and --allow-large where that helps). Returns a note for runs estimated over kNoteEstimatedSeconds
-// (empty otherwise). The time is the work over a rate measured on a slow machine (RunEstimate.cpp).
+// (empty otherwise), of the model that runs. The time is the work over a rate measured on a slow machine
+// (RunEstimate.cpp).
 constexpr double kMaxEstimatedSeconds = 3 * 3600.0;
 constexpr double kNoteEstimatedSeconds = 120.0;
 std::string checkRunSize(const RunEstimate& estimate, bool allowLarge);
