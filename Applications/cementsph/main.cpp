@@ -3,6 +3,7 @@
 
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/LibraryMessages.h"
+#include "cementsph/sph/Simulation.h"
 
 #include <omp.h>
 
@@ -151,6 +152,9 @@ int main(int argc, char** argv) {
       return kBadInput;
     } catch (const std::bad_alloc&) {
       std::cerr << prefix << "out of memory (a smaller volume, region or particle count needs less)\n";
+      return kFailedRun;
+    } catch (const cementsph::sph::SimulationError& e) { // unstable, or the cement has nowhere to go
+      std::cerr << prefix << singleLine(e.what()) << "\n";
       return kFailedRun;
     } catch (const cementsph::imaging::OutputError& e) {
       std::cerr << prefix << singleLine(e.what()) << "\n";

@@ -86,3 +86,31 @@ TEST(InjectCommand, TipInSolidIsOneLineAndNoOutput) {
   EXPECT_EQ(std::count(s.output.begin(), s.output.end(), '\n'), 1) << s.output;
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
+
+TEST(InjectCommand, ACementWithNowhereToGoIsAFailedRunExitTwo) {
+  // A closed box: 18^3 pore voxels of 1 mm (5.832 ml) inside a solid shell, the tip at its centre. The pore
+  // check before the run passes for 5.8 ml, but the cannula's shaft (11G, 0.33 mm wall: the voxels within
+  // 1.524 mm of its axis behind the tip, 5 per slice over 9 slices) takes 45 of them: 5.787 ml is left.
+  const fs::path dir = scratch("inject-full");
+  auto img = cementsph::imaging::ImageType::New();
+  cementsph::imaging::ImageType::RegionType region;
+  cementsph::imaging::ImageType::SizeType size;
+  size.Fill(20);
+  region.SetSize(size);
+  img->SetRegions(region);
+  img->SetSpacing(1.0);
+  img->Allocate();
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 20; ++i) {
+        const bool shell = i == 0 || j == 0 || k == 0 || i == 19 || j == 19 || k == 19;
+        img->SetPixel({{i, j, k}}, shell ? 1000.f : -100.f);
+      }
+  cementsph::imaging::writeVolume(img, (dir / "ct.nrrd").string());
+  std::ofstream(dir / "scene.json") << R"({"tip_mm": [10, 10, 10], "volume_ml": 5.8, "flow_rate_ml_per_s": 0.5})";
+  const Result r = run("inject --quiet --no-pictures --ct " + (dir / "ct.nrrd").string() + " --scene " +
+                       (dir / "scene.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("full"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out" / "metrics.json"));
+}
