@@ -113,4 +113,5 @@ TEST(InjectCommand, ACementWithNowhereToGoIsAFailedRunExitTwo) {
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("full"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "out" / "metrics.json"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "particles_0000.vtp")); // the failed run's snapshots went with it
 }

@@ -51,12 +51,21 @@ InjectionWriter::InjectionWriter(std::string outDir, const SceneConfig& scene, d
   if (ctSnapshots_) ctFrame(0.0, "simulated_ct_start.nrrd", "", nullptr);
 }
 
+InjectionWriter::~InjectionWriter() {
+  if (finished_) return;
+  for (const std::string& path : written_) {
+    std::error_code ec;
+    fs::remove(path, ec); // best effort: the run's own error is the message
+  }
+}
+
 void InjectionWriter::ctFrame(double time, const std::string& ctName, const std::string& particlesName,
                               const imaging::ImageType* now) {
   const auto t0 = std::chrono::steady_clock::now();
   imaging::ImageType::Pointer made;
   if (!now) made = simulatedCt_();
   imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(outDir_) / ctName).string());
+  written_.push_back((fs::path(outDir_) / ctName).string());
   ctSnapshotWallS_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ctFrames_.push_back({{"index", ctFrames_.size()}, {"time_s", time}, {"simulated_ct", ctName},
                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
@@ -67,6 +76,7 @@ void InjectionWriter::snapshot(double time, vtkPolyData* particles, const imagin
   char name[64];
   std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots_.size());
   imaging::writePolyData(particles, (fs::path(outDir_) / name).string());
+  written_.push_back((fs::path(outDir_) / name).string());
   if (ctSnapshots_) {
     char ctName[64];
     std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots_.size());
@@ -96,6 +106,7 @@ void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging:
     imaging::writeTextAtomically((out / "sequence.json").string(), sequence.dump(2) + "\n");
   }
   imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
+  finished_ = true;
 }
 
 InjectionProgress::InjectionProgress(const InjectionRunOptions& options, std::chrono::steady_clock::time_point start,

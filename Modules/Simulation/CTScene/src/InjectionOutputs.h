@@ -34,11 +34,15 @@ std::string tipPressureCsv(const std::vector<TipRecord>& series, std::optional<d
 // The snapshots and the final files in outDir; with an empty outDir it writes nothing. Construction creates
 // the folder, removes an earlier run's temporaries and numbered snapshots (AtomicFile.h) and, with the
 // scene's simulated_ct_snapshots, writes simulated_ct_start.nrrd (t = 0, no cement: an X-ray sequence's
-// background).
+// background). A run that ends without finish() (it failed: an exception) takes its snapshots away with it,
+// so a failed run leaves no partial series behind.
 class InjectionWriter {
 public:
   using SimulatedCt = std::function<imaging::ImageType::Pointer()>; // the simulated CT of the state now
   InjectionWriter(std::string outDir, const SceneConfig& scene, double huPerRelativeDensity, SimulatedCt simulatedCt);
+  ~InjectionWriter();
+  InjectionWriter(const InjectionWriter&) = delete;
+  InjectionWriter& operator=(const InjectionWriter&) = delete;
 
   bool writing() const { return !outDir_.empty(); }
   // particles_NNNN.vtp (and simulated_ct_NNNN.nrrd: `ctNow` if given, else made) at time [s].
@@ -59,6 +63,8 @@ private:
   nlohmann::json ctFrames_ = nlohmann::json::array();
   double ctSnapshotWallS_ = 0.0;
   std::vector<std::pair<double, std::string>> snapshots_;
+  std::vector<std::string> written_; // this run's snapshot files
+  bool finished_ = false;
 };
 
 // The progress of a run: a line on stderr now and then (every second with an ETA on a terminal, every 30 s
