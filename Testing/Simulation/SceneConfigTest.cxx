@@ -152,3 +152,34 @@ TEST(SceneConfig, FileErrorsNameThePath) {
   EXPECT_THROW(loadSceneFile(path), std::invalid_argument);
   EXPECT_THROW(loadSceneFile((dir / "missing.json").string()), std::invalid_argument);
 }
+
+TEST(SceneConfig, TheModelAndRheologyKeysAreReadAndCheckedNamingTheKey) {
+  json j = minimal();
+  j["viscosity_law"] = "carreau";
+  j["zero_shear_viscosity_pa_s"] = 300.0;
+  j["carreau_time_constant_s"] = 2.0;
+  j["flow_index"] = 0.4;
+  j["curing_table"] = {{0.0, 1.0}, {600.0, 5.0}};
+  j["mixing_to_injection_s"] = 300.0;
+  j["cannula_gauge"] = "13G";
+  const SceneConfig s = sceneFromJson(j);
+  EXPECT_EQ(s.viscosityLaw, "carreau");
+  EXPECT_DOUBLE_EQ(s.rheology.zeroShearViscosityPaS, 300.0);
+  EXPECT_DOUBLE_EQ(s.cannulaInnerDiameterMm, 1.803);    // the gauge table
+  EXPECT_DOUBLE_EQ(s.curingFactor(0.0), 3.0);           // 300 s after mixing: halfway from 1 to 5
+  EXPECT_DOUBLE_EQ(s.curingFactor(1000.0), 5.0);        // held past the table
+  EXPECT_EQ(sceneFromJson(toJson(s)).cannulaInnerDiameterMm, 1.803); // round trip
+  for (const auto& [key, bad] : std::vector<std::pair<std::string, json>>{
+           {"viscosity_law", "bingham"},
+           {"pore_permeability_m2", 1e300},
+           {"capillary_tension_n_per_m", -1.0},
+           {"curing_table", json{{0.0, 1.0}, {0.0, 2.0}}},
+           {"curing_table", json{{0.0, -1.0}}},
+           {"mixing_to_injection_s", -5.0},
+           {"cannula_gauge", "99G"},
+           {"pressure_model", "magic"}}) {
+    json k = minimal();
+    k[key] = bad;
+    expectError(k, key);
+  }
+}

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 namespace cementsph::scene::detail {
 
@@ -137,6 +138,10 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   // paper's Eq. 9 resistance with no solid near), unless the scene gives pore_permeability_m2.
   const double d = scene.spacingM(), h = model.smoothingLength;
   const double poreK = scene.porePermeabilityM2.value_or(std::pow(h, 5) / (model.dragCoefficient * d * d * d));
+  if (!(poreK >= 1e-18 && poreK <= 1e-3))
+    throw std::invalid_argument("scene: the pore permeability k0 = h^5 / (Cf d^3) = " + std::to_string(poreK) +
+                                " m^2 from particle_radius_mm and the preset is outside 1e-18 .. 1e-3 m^2 (give "
+                                "pore_permeability_m2, or a particle radius of a pore's scale)");
   VoxelMedium medium;
   medium.size = solid.grid.size;
   medium.origin = solid.grid.origin;

@@ -201,7 +201,9 @@ void SceneConfig::validate() const {
   if (roiSizeMm < 4 * spacingM() * 1e3) fail("roi_size_mm", "must be at least 4 particle diameters");
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
   requirePositive(solidMassFactor, "solid_mass_factor");
-  if (porePermeabilityM2) requirePositive(*porePermeabilityM2, "pore_permeability_m2");
+  // Trabecular bone 2.7e-11 .. 2e-8 m^2 (model-notes); outside 1e-18 .. 1e-3 m^2 a value is a typo.
+  if (porePermeabilityM2 && !(*porePermeabilityM2 >= 1e-18 && *porePermeabilityM2 <= 1e-3))
+    fail("pore_permeability_m2", "must be between 1e-18 and 1e-3 m^2");
   try {
     (void)sph::makeRheology(viscosityLaw, rheology);
   } catch (const std::invalid_argument& e) {
