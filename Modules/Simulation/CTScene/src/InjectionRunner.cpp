@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <sstream>
 #include <limits>
 
 namespace cementsph::scene {
@@ -97,8 +98,31 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const Eigen::Vector3d tipMm = *scene.tipMm;
   const Eigen::Vector3d tip = tipMm * 1e-3;
 
+  // The bone: pore-resolved (the paper's solid voxels) or a continuum from HU (BoneCalibration.h). Auto:
+  // a continuum when the tip's voxel is above threshold_hu but not cortex, i.e. no pore is resolved there.
+  std::string boneModel = scene.boneModel, boneReason = "forced by the scene key bone_model";
+  if (boneModel == "auto") {
+    imaging::ImageType::PointType point;
+    for (unsigned a = 0; a < 3; ++a) point[a] = tipMm[int(a)];
+    imaging::ImageType::IndexType index;
+    boneModel = "pore-resolved";
+    boneReason = "the tip's voxel is at or below threshold_hu: the CT resolves the pores (the paper's model)";
+    if (ct->TransformPhysicalPointToIndex(point, index)) {
+      const double hu = ct->GetPixel(index);
+      if (hu > scene.thresholdHu && hu <= scene.bone.corticalHu) {
+        boneModel = "continuum";
+        std::ostringstream r;
+        r << "the tip's voxel is " << hu << " HU, above threshold_hu " << scene.thresholdHu
+          << " HU and below cortical_hu " << scene.bone.corticalHu
+          << " HU: the CT does not resolve the pores there, so the bone is a continuum from HU";
+        boneReason = r.str();
+      }
+    }
+  }
+  const bool continuum = boneModel == "continuum";
+
   PorousSolidOptions po;
-  po.thresholdHu = scene.thresholdHu;
+  po.thresholdHu = continuum ? scene.bone.corticalHu : scene.thresholdHu; // continuum: only cortex is solid
   po.roiSizeMm = scene.roiSizeMm;
   po.reachMm = 2.0 * m.smoothingLength * 1e3;
   po.restDensity = rho0;
@@ -109,8 +133,12 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
   const ModelChoice choice = chooseModel(scene, m.restDensity, m.soundSpeed, roiPorosity);
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
+  if (o.progress) std::cerr << "inject: bone " << boneModel << ": " << boneReason << "\n";
   if (choice.pressureModel == "voxel-darcy")
-    return detail::runVoxelDarcyInjection(ct, scene, o, {preset, m, solid, choice, wallStart});
+    return detail::runVoxelDarcyInjection(ct, scene, o, {preset, m, solid, choice, wallStart, continuum, boneReason});
+  if (continuum)
+    throw std::invalid_argument("scene: bone_model \"continuum\" needs pressure_model \"voxel-darcy\" (got \"" +
+                                choice.pressureModel + "\")");
   if (scene.viscosityLaw != "newtonian" || !scene.curingTable.empty())
     throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw + "\" and curing_table need pressure_model "
                                 "\"voxel-darcy\" (the particle models are Newtonian; got \"" + choice.pressureModel + "\")");

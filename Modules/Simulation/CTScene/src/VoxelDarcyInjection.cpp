@@ -17,6 +17,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -69,6 +71,47 @@ std::vector<float> capillaryEntryPressure(const PorousSolid& solid, double tensi
     entry[c] = float(2.0 * tensionNPerM / (rMm * 1e-3));
   }
   return entry;
+}
+
+// Cement in soft tissue, by 6-connected site: volume-weighted centre (mm, the CT's frame), first arrival
+// (s) and volume (ml). Returns the total leaked volume [m^3].
+double leakage(const VoxelDarcyFilling& f, const std::vector<std::uint8_t>& softTissue, nlohmann::json* sites) {
+  const VoxelMedium& m = f.medium();
+  double total = 0;
+  std::vector<std::uint8_t> seen(softTissue.empty() ? 0 : m.count(), 0);
+  if (sites) *sites = nlohmann::json::array();
+  for (std::size_t c = 0; c < softTissue.size(); ++c) {
+    if (!softTissue[c] || f.fill()[c] <= 0 || seen[c]) continue;
+    double volume = 0, first = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    std::vector<std::size_t> stack{c};
+    seen[c] = 1;
+    while (!stack.empty()) {
+      const std::size_t v = stack.back();
+      stack.pop_back();
+      const double vol = f.fill()[v] * m.porosity[v] * m.voxelVolume();
+      volume += vol;
+      centre += vol * m.centre(v);
+      first = std::min(first, f.arrivalTime()[v]);
+      const auto ijk = m.ijk(v);
+      const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+      for (const auto& s : d) {
+        const int i = ijk[0] + s[0], j = ijk[1] + s[1], k = ijk[2] + s[2];
+        if (i < 0 || j < 0 || k < 0 || i >= m.size[0] || j >= m.size[1] || k >= m.size[2]) continue;
+        const std::size_t n = m.index(i, j, k);
+        if (softTissue[n] && f.fill()[n] > 0 && !seen[n]) {
+          seen[n] = 1;
+          stack.push_back(n);
+        }
+      }
+    }
+    total += volume;
+    if (sites) {
+      const Eigen::Vector3d mm = centre / volume * 1e3;
+      sites->push_back({{"position_mm", {mm.x(), mm.y(), mm.z()}}, {"first_time_s", first}, {"volume_ml", volume * 1e6}});
+    }
+  }
+  return total;
 }
 
 // One point per voxel holding cement.
@@ -148,8 +191,24 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   medium.spacing = solid.grid.spacing;
   medium.porosity.assign(medium.count(), 1.0f);
   medium.permeability.assign(medium.count(), poreK);
-  for (std::size_t c = 0; c < medium.count(); ++c)
-    if (solid.solid[c]) medium.porosity[c] = 0.0f;
+  std::vector<std::uint8_t> softTissue; // continuum: voxels outside bone, where cement is leakage
+  if (in.continuum) {
+    // Each voxel's porosity and permeability from its HU (BoneCalibration.h).
+    softTissue.assign(medium.count(), 0);
+    const auto start = ct->GetLargestPossibleRegion().GetIndex();
+    for (std::size_t c = 0; c < medium.count(); ++c) {
+      const auto v = medium.ijk(c);
+      imaging::ImageType::IndexType idx;
+      for (unsigned a = 0; a < 3; ++a) idx[a] = start[a] + solid.roiStart[a] + v[a];
+      const double hu = ct->GetPixel(idx);
+      medium.porosity[c] = float(scene.bone.porosity(hu));
+      medium.permeability[c] = scene.bone.permeability(hu);
+      softTissue[c] = scene.bone.tissue(hu) == BoneCalibration::Tissue::SoftTissue;
+    }
+  } else {
+    for (std::size_t c = 0; c < medium.count(); ++c)
+      if (solid.solid[c]) medium.porosity[c] = 0.0f;
+  }
   // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it).
   std::size_t shaftVoxels = 0;
   if (scene.cannulaWall) {
@@ -215,7 +274,7 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   const double endTime = T * (1 - 1e-12);
   InjectionProgress progress(o, in.wallStart, T);
   double nextSnapshot = scene.snapshotIntervalS;
-  bool stopped = false;
+  bool stopped = false, stoppedAtLeak = false;
   try {
     while (filling.time() < endTime) {
       const double factor = scene.curingFactor(filling.time());
@@ -231,6 +290,12 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
       if (nextSnapshot - filling.time() > 1e-9 * T) dtMax = std::min(dtMax, nextSnapshot - filling.time());
       filling.step(flowRate, dtMax);
       tipSeries.push_back({filling.time(), filling.sourcePressure(), cannulaDrop(factor, mu)});
+      // A surgeon stops at the first leak (1 mm^3 of cement outside bone).
+      if (scene.stopAtFirstLeak && !softTissue.empty() && leakage(filling, softTissue, nullptr) > 1e-9) {
+        stoppedAtLeak = true;
+        stopped = true;
+        break;
+      }
       if (filling.time() >= nextSnapshot * (1 - 1e-12) && filling.time() < endTime) {
         writeSnapshot();
         while (nextSnapshot <= filling.time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
@@ -302,7 +367,9 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   metrics["model_reason"] = in.choice.reason;
   metrics["recommended_pressure_model"] = in.choice.recommended;
   metrics["pressure_model"] = "voxel-darcy";
-  metrics["resistance"] = scene.porePermeabilityM2 ? "pore-permeability (scene)" : "pore-permeability (preset drag k0)";
+  metrics["resistance"] = in.continuum              ? "continuum permeability from HU (Kozeny-Carman)"
+                          : scene.porePermeabilityM2 ? "pore-permeability (scene)"
+                                                     : "pore-permeability (preset drag k0)";
   metrics["viscosity_law"] = scene.viscosityLaw;
   {
     double lo = std::numeric_limits<double>::infinity(), hi = 0;
@@ -319,6 +386,25 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   metrics["pressure_is_physical"] = true;
   metrics["pore_permeability_m2"] = poreK;
   metrics["porosity_at_tip"] = porosityAtTip;
+  metrics["bone_model"] = in.continuum ? "continuum" : "pore-resolved";
+  metrics["bone_model_reason"] = in.boneModelReason;
+  if (in.continuum) {
+    json sites;
+    metrics["leakage_volume_ml"] = leakage(filling, softTissue, &sites) * 1e6;
+    metrics["leakage_sites"] = sites;
+    metrics["leakage_assessed"] = true;
+    metrics["stopped_at_first_leak"] = stoppedAtLeak;
+    metrics["bone_calibration"] = {{"marrow_hu", scene.bone.marrowHu},
+                                   {"bone_tissue_hu", scene.bone.boneTissueHu},
+                                   {"kozeny_carman_diameter_mm", scene.bone.kozenyCarmanDiameterMm},
+                                   {"cortical_hu", scene.bone.corticalHu},
+                                   {"soft_tissue_max_hu", scene.bone.softTissueMaxHu},
+                                   {"soft_tissue_permeability_m2", scene.bone.softTissuePermeabilityM2}};
+  } else {
+    metrics["leakage_volume_ml"] = 0.0; // a pore-resolved CT has no soft tissue class: not assessed
+    metrics["leakage_sites"] = json::array();
+    metrics["leakage_assessed"] = false;
+  }
   metrics["permeability_at_tip_m2"] = permeabilityAtTip;
   metrics["cannula_pressure_drop_pa"] = finalCannula;
   metrics["injection_pressure_pa"] = finalPressure + finalCannula;

@@ -13,6 +13,7 @@
 #include "cementsph/sph/Presets.h"
 
 #include <chrono>
+#include <string>
 
 namespace cementsph::scene::detail {
 
@@ -22,6 +23,8 @@ struct VoxelDarcyRunInputs {
   const PorousSolid& solid;
   const ModelChoice& choice;
   std::chrono::steady_clock::time_point wallStart;
+  bool continuum = false;     // bone as a continuum from HU (BoneCalibration.h); else pore-resolved
+  std::string boneModelReason;
 };
 
 InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const SceneConfig& scene,

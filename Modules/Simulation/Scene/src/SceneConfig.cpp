@@ -149,6 +149,19 @@ void applySceneJson(SceneConfig& s, const json& j) {
         if (!row.is_array() || row.size() != 2) fail(key, "must be a non-empty array of [t_since_mixing_s, factor] pairs");
         s.curingTable.emplace_back(number(row[0], key), number(row[1], key));
       }
+    } else if (key == "bone_model") {
+      s.boneModel = text(v, key);
+      if (s.boneModel != "auto" && s.boneModel != "pore-resolved" && s.boneModel != "continuum")
+        fail(key, "must be \"auto\", \"pore-resolved\" or \"continuum\" (got \"" + s.boneModel + "\")");
+    } else if (key == "marrow_hu") s.bone.marrowHu = number(v, key);
+    else if (key == "bone_tissue_hu") s.bone.boneTissueHu = number(v, key);
+    else if (key == "kozeny_carman_diameter_mm") s.bone.kozenyCarmanDiameterMm = number(v, key);
+    else if (key == "cortical_hu") s.bone.corticalHu = number(v, key);
+    else if (key == "soft_tissue_max_hu") s.bone.softTissueMaxHu = number(v, key);
+    else if (key == "soft_tissue_permeability_m2") s.bone.softTissuePermeabilityM2 = number(v, key);
+    else if (key == "stop_at_first_leak") {
+      if (!v.is_boolean()) fail(key, "must be true or false");
+      s.stopAtFirstLeak = v.get<bool>();
     } else if (key == "cannula_gauge") {
       s.cannulaGauge = text(v, key);
       try {
@@ -209,6 +222,7 @@ void SceneConfig::validate() const {
   } catch (const std::invalid_argument& e) {
     fail("viscosity_law", e.what());
   }
+  if (const char* problem = bone.problem()) fail("bone_model", problem);
   if (!(mixingToInjectionS >= 0) || !std::isfinite(mixingToInjectionS)) fail("mixing_to_injection_s", "must be >= 0 s");
   for (std::size_t k = 0; k < curingTable.size(); ++k) {
     if (!(curingTable[k].second > 0) || !std::isfinite(curingTable[k].second)) fail("curing_table", "factors must be > 0");
@@ -329,6 +343,14 @@ json toJson(const SceneConfig& s) {
     for (const auto& [t, f] : s.curingTable) j["curing_table"].push_back({t, f});
   }
   if (s.cannulaGauge) j["cannula_gauge"] = *s.cannulaGauge;
+  j["bone_model"] = s.boneModel;
+  j["marrow_hu"] = s.bone.marrowHu;
+  j["bone_tissue_hu"] = s.bone.boneTissueHu;
+  j["kozeny_carman_diameter_mm"] = s.bone.kozenyCarmanDiameterMm;
+  j["cortical_hu"] = s.bone.corticalHu;
+  j["soft_tissue_max_hu"] = s.bone.softTissueMaxHu;
+  j["soft_tissue_permeability_m2"] = s.bone.softTissuePermeabilityM2;
+  j["stop_at_first_leak"] = s.stopAtFirstLeak;
   return j;
 }
 

@@ -45,6 +45,13 @@
 //   curing_table [[t_s, factor]]    viscosity factor over time since mixing (piecewise linear; held outside
 //                                   the table), multiplying any law                            none (1)
 //   cannula_gauge "8G".."13G"       sets cannula_inner_diameter_mm from the gauge table (TubeFlow.h)
+//   bone_model "auto"|"pore-resolved"|"continuum"   pore-resolved: the paper's solid voxels; continuum: each
+//                                   voxel's porosity and permeability from its HU (BoneCalibration.h); auto:
+//                                   continuum when the tip's voxel is above threshold_hu (no pore resolved
+//                                   there), pore-resolved otherwise                              auto
+//   marrow_hu, bone_tissue_hu, kozeny_carman_diameter_mm, cortical_hu, soft_tissue_max_hu,
+//   soft_tissue_permeability_m2     the continuum's calibration              0, 1400, 0.3, 350, 40, 1e-7
+//   stop_at_first_leak (bool)       continuum: stop the injection when cement first reaches soft tissue false
 //   capillary_tension_n_per_m       voxel-darcy: interfacial tension sigma of cement against the displaced
 //                                   fluid; > 0 gives each pore voxel a capillary entry pressure 2 sigma / r
 //                                   (r its distance to the solid; VALIDATION.md, the viscosity trend)     0 (off)
@@ -52,6 +59,7 @@
 // line naming the key.
 #pragma once
 
+#include "cementsph/scene/BoneCalibration.h"
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/Viscosity/Rheology.h"
 #include "cementsph/sph/ViscositySchedule.h"
@@ -100,6 +108,10 @@ struct SceneConfig {
   double mixingToInjectionS = 0.0;
   std::vector<std::pair<double, double>> curingTable; // (time since mixing [s], viscosity factor); empty: 1
   std::optional<std::string> cannulaGauge;
+  // Bone (BoneCalibration.h): pore-resolved (the paper: HU > threshold_hu is solid) or a continuum from HU.
+  std::string boneModel = "auto";
+  BoneCalibration bone;
+  bool stopAtFirstLeak = false;
   double curingFactor(double timeSinceInjectionStartS) const;
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
