@@ -1,4 +1,5 @@
 #include "cementsph/scene/InjectionRunner.h"
+#include "cementsph/scene/AxisAlignedCT.h"
 
 #include "InjectionOutputs.h"
 #include "VoxelDarcyInjection.h"
@@ -77,8 +78,11 @@ double finiteOrZero(double x) { return std::isfinite(x) ? x : 0.0; }
 
 } // namespace
 
-InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig& scene, const InjectionRunOptions& o) {
+InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConfig& scene, const InjectionRunOptions& o) {
   scene.validate();
+  // Any orientation: an oblique CT is resampled onto an axis-aligned grid in its own patient frame.
+  const imaging::ImageType::ConstPointer aligned = axisAligned(input);
+  const imaging::ImageType* ct = aligned.GetPointer();
   const auto wallStart = std::chrono::steady_clock::now();
   sph::ModelPreset preset = sph::modelPreset(scene.modelPreset);
   sph::ModelParameters m = preset.model;
@@ -135,7 +139,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
   if (o.progress) std::cerr << "inject: bone " << boneModel << ": " << boneReason << "\n";
   if (choice.pressureModel == "voxel-darcy")
-    return detail::runVoxelDarcyInjection(ct, scene, o, {preset, m, solid, choice, wallStart, continuum, boneReason});
+    return detail::runVoxelDarcyInjection(ct, scene, o, {preset, m, solid, choice, wallStart, continuum, boneReason, ct != input});
   if (continuum)
     throw std::invalid_argument("scene: bone_model \"continuum\" needs pressure_model \"voxel-darcy\" (got \"" +
                                 choice.pressureModel + "\")");
@@ -305,6 +309,7 @@ InjectionRunResult runInjection(const imaging::ImageType* ct, const SceneConfig&
   metrics["neighbour_rebuilds"] = st.neighbourRebuilds;
   metrics["neighbour_relistings"] = st.relistings;
   metrics["model_preset"] = preset.name;
+  metrics["ct_resampled_to_axis_aligned"] = ct != input;
   metrics["model"] = choice.model;
   metrics["model_reason"] = choice.reason;
   metrics["recommended_pressure_model"] = choice.recommended;

@@ -209,14 +209,16 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
     for (std::size_t c = 0; c < medium.count(); ++c)
       if (solid.solid[c]) medium.porosity[c] = 0.0f;
   }
-  // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it).
+  // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it): voxels more
+  // than half a voxel behind the outlet plane, so that the voxel holding the tip stays open wherever the tip
+  // falls within it.
   std::size_t shaftVoxels = 0;
   if (scene.cannulaWall) {
     const double outer = 0.5 * innerDiameter + kCannulaWallM;
     for (std::size_t c = 0; c < medium.count(); ++c) {
       const Eigen::Vector3d r = medium.centre(c) - tip;
       const double s = r.dot(axis);
-      if (s < 0 && s >= -cannulaLength && (r - s * axis).norm() <= outer && medium.porosity[c] > 0) {
+      if (s < -0.5 * solid.grid.spacing.maxCoeff() && s >= -cannulaLength && (r - s * axis).norm() <= outer && medium.porosity[c] > 0) {
         medium.porosity[c] = 0.0f;
         ++shaftVoxels;
       }
@@ -363,6 +365,7 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   metrics["wall_time_s"] = wallS;
   metrics["real_time_factor"] = wallS > 0 ? filling.time() / wallS : 0.0;
   metrics["model_preset"] = in.preset.name;
+  metrics["ct_resampled_to_axis_aligned"] = in.resampled;
   metrics["model"] = in.choice.model;
   metrics["model_reason"] = in.choice.reason;
   metrics["recommended_pressure_model"] = in.choice.recommended;

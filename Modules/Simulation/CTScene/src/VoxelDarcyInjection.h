@@ -25,6 +25,7 @@ struct VoxelDarcyRunInputs {
   std::chrono::steady_clock::time_point wallStart;
   bool continuum = false;     // bone as a continuum from HU (BoneCalibration.h); else pore-resolved
   std::string boneModelReason;
+  bool resampled = false;     // the CT was oblique and is the axis-aligned resampling (AxisAlignedCT.h)
 };
 
 InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const SceneConfig& scene,
