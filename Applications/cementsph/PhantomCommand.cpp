@@ -6,6 +6,7 @@
 
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/phantom/FoamPhantom.h"
+#include "cementsph/phantom/VertebraPhantom.h"
 
 #include <nlohmann/json.hpp>
 
@@ -30,10 +31,75 @@ struct PhantomArgs {
   double volumeMl = 1.0, viscosityPaS = 100.0;
   bool noPost = false, postDicom = false, quiet = false;
   int threads = 0;
+  std::string kind = "foam";
+  double foramenDiameterMm = 3.0;
 };
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The vertebra: pre.nrrd, the same as a DICOM series in pre_dicom/, and truth.json (geometry, plan, command).
+int runVertebra(const PhantomArgs& a, bool noiseGiven) {
+  using namespace cementsph::phantom;
+  VertebraOptions vo;
+  if (noiseGiven) vo.noiseHu = a.noiseHu; // else the vertebra's own default (the foam's is higher)
+  vo.seed = a.seed;
+  vo.foramenDiameterMm = a.foramenDiameterMm;
+  try {
+    vo.validate();
+  } catch (const std::invalid_argument& e) {
+    std::string m = e.what();
+    for (auto& c : m)
+      if (c == '_') c = '-';
+    throw std::invalid_argument("--" + m);
+  }
+  const fs::path out(a.out);
+  if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error(a.out + ": exists and is not a directory");
+  const auto t0 = std::chrono::steady_clock::now();
+  const VertebraResult v = makeVertebra(vo);
+  nlohmann::json truth;
+  truth["kind"] = "vertebra";
+  truth["vertebra"] = v.toJson();
+  truth["vertebra"]["spacing_mm"] = vo.spacingMm;
+  truth["vertebra"]["field_mm"] = vo.fieldMm;
+  truth["vertebra"]["cortical_hu"] = vo.corticalHu;
+  truth["vertebra"]["trabecular_centre_hu"] = vo.trabecularCentreHu;
+  truth["vertebra"]["trabecular_rim_hu"] = vo.trabecularRimHu;
+  truth["vertebra"]["canal_hu"] = vo.canalHu;
+  truth["vertebra"]["soft_tissue_hu"] = vo.softTissueHu;
+  truth["vertebra"]["foramen_diameter_mm"] = vo.foramenDiameterMm;
+  truth["vertebra"]["noise_hu"] = vo.noiseHu;
+  truth["vertebra"]["seed"] = vo.seed;
+  truth["vertebra"]["generation_time_s"] = secondsSince(t0);
+  truth["injection"] = {{"tip_mm", v.suggestedTipMm},     {"direction", v.suggestedDirection},
+                        {"volume_ml", 4.0},               {"flow_rate_ml_per_s", 0.05},
+                        {"viscosity_pa_s", 100.0},        {"note", "a transpedicular plan for the demo"}};
+  std::ostringstream command;
+  command << "cementsph phantom --kind vertebra --out " << a.out << " --noise-hu " << vo.noiseHu << " --seed " << vo.seed
+          << " --foramen-diameter-mm " << vo.foramenDiameterMm;
+  truth["command"] = command.str();
+  const bool created = !fs::exists(out);
+  fs::create_directories(out);
+  std::vector<fs::path> written;
+  try {
+    cementsph::imaging::writeVolume(v.ct, (out / "pre.nrrd").string());
+    written.push_back(out / "pre.nrrd");
+    fs::remove_all(out / "pre_dicom");
+    written.push_back(out / "pre_dicom");
+    cementsph::imaging::writeDicomSeries(v.ct, (out / "pre_dicom").string(), -1024.0);
+    cementsph::app::writeFileAtomically(out / "truth.json", truth.dump(2) + "\n");
+  } catch (...) {
+    std::error_code ec;
+    for (const auto& p : written) fs::remove_all(p, ec);
+    if (created) fs::remove(out, ec);
+    throw;
+  }
+  const auto size = v.ct->GetLargestPossibleRegion().GetSize();
+  std::cout << "vertebra " << size[0] << " x " << size[1] << " x " << size[2] << " voxels of " << vo.spacingMm[0] << " x "
+            << vo.spacingMm[1] << " x " << vo.spacingMm[2] << " mm; suggested tip " << v.suggestedTipMm[0] << ","
+            << v.suggestedTipMm[1] << "," << v.suggestedTipMm[2] << " mm; results in " << a.out << "\n";
+  return 0;
 }
 
 cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
@@ -55,8 +121,13 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
   sub.add_flag("--post-dicom", a->postDicom, "Also write the post CT as a DICOM series in DIR/post_dicom");
   sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--quiet", a->quiet, "No progress line");
+  sub.add_option("--kind", a->kind, "foam (the paper's foam block, default) or vertebra (a clinical-resolution vertebra "
+                                    "with cortex, canal and a basivertebral foramen: pre.nrrd, pre_dicom/, truth.json)");
+  sub.add_option("--foramen-diameter-mm", a->foramenDiameterMm, "vertebra: the posterior-wall opening (default 3; 0: intact)");
   return [a, &sub]() {
     using namespace cementsph::phantom;
+    if (a->kind == "vertebra") return runVertebra(*a, sub.count("--noise-hu") > 0);
+    if (a->kind != "foam") throw std::invalid_argument("--kind must be foam or vertebra (got " + a->kind + ")");
     FoamOptions fo;
     if (a->sizeMm.size() == 1) fo.sizeMm = {a->sizeMm[0], a->sizeMm[0], a->sizeMm[0]};
     else if (a->sizeMm.size() == 3) fo.sizeMm = {a->sizeMm[0], a->sizeMm[1], a->sizeMm[2]};

@@ -52,6 +52,24 @@ TEST(DemoCommand, RunsTheBundledPipelineAndAgreesWithThePhantom) {
   EXPECT_LT(mi.at("fluid_in_solid_fraction").get<double>(), 0.01);
 }
 
+TEST(DemoCommand, VertebraReadsTheDicomSeriesAndReportsTheLeak) {
+  // The vertebra phantom's plan reaches its basivertebral foramen (VertebraPhantomTest checks where).
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "demo-vertebra";
+  fs::remove_all(out);
+  fs::create_directories(out.parent_path());
+  const std::string cmd = std::string(CEMENTSPH_EXECUTABLE) + " demo --vertebra --out " + out.string() + " > " +
+                          (out.string() + ".log") + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "see " << out.string() << ".log";
+  std::ifstream in(out / "metrics.json");
+  const auto m = nlohmann::json::parse(in);
+  EXPECT_EQ(m.at("bone_model"), "continuum");
+  EXPECT_GT(m.at("leakage_volume_ml").get<double>(), 0.0);
+  EXPECT_FALSE(m.at("leakage_sites").empty());
+  EXPECT_NEAR(m.at("cement_volume_ml").get<double>(), 4.0, 0.04);
+  EXPECT_TRUE(fs::exists(out / "inject" / "injection_pressure.png"));
+}
+
 namespace {
 nlohmann::json injectOnPhantom(double viscosityPaS, const std::string& pressureModel) {
   const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / ("trend-" + pressureModel + "-" + std::to_string(int(viscosityPaS)));
