@@ -12,6 +12,7 @@
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/rendering/RenderBackend.h"
 #include "cementsph/rendering/SliceComparison.h"
 #include "cementsph/rendering/SurfaceComparison.h"
 #include "cementsph/study/AlignedPost.h"
@@ -287,6 +288,12 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
           cementsph::rendering::renderSurfaceComparison(ct.surface, sim->surface, png);
         });
       }
+    }
+
+    // Which off-screen backend drew the pictures (OSMesa, surfaceless EGL or an X display), in metrics.json.
+    if (const auto backend = cementsph::rendering::lastRenderBackend()) {
+      metrics["render_backend"] = cementsph::rendering::renderBackendName(*backend);
+      writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
     }
 
     // 7. Summary.

@@ -19,6 +19,7 @@
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/rendering/RenderBackend.h"
 #include "cementsph/rendering/ProjectedAreaPlot.h"
 #include "cementsph/rendering/XrayFramesPicture.h"
 
@@ -444,6 +445,7 @@ cementsph::app::CommandRunner setupXray(CLI::App& sub) {
     }
     const double pictureSeconds = seconds(t);
     metrics["pictures"] = pictures;
+    if (const auto backend = rendering::lastRenderBackend()) metrics["render_backend"] = rendering::renderBackendName(*backend);
     metrics["timing_s"] = {{"drr_and_segmentation", drrSeconds}, {"write", writeSeconds},
                            {"pictures", pictureSeconds}, {"total", seconds(start)}};
     cementsph::imaging::writeTextAtomically((dir / "metrics.json").string(), metrics.dump(2) + "\n");

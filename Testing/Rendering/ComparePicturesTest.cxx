@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -43,6 +47,19 @@ TEST(ComparePictures, WritesSlicesAndSurfacesHeadless) {
   EXPECT_EQ(surfaces.width, 1500);
   EXPECT_EQ(surfaces.height, 560);
   EXPECT_GT(surfaces.distinctColours, 50u);
+  // metrics.json names the backend that drew them; forced to OSMesa, it says so.
+  auto backendOf = [](const fs::path& metrics) {
+    std::ifstream in(metrics);
+    return nlohmann::json::parse(in).value("render_backend", std::string("absent"));
+  };
+  const std::string backend = backendOf(out / "metrics.json");
+  EXPECT_TRUE(backend == "osmesa" || backend == "egl" || backend == "x") << backend;
+  setenv("CEMENTSPH_RENDER_BACKEND", "osmesa", 1);
+  const fs::path forced = scratchFolder() / "forced";
+  const auto f = runProgram(CEMENTSPH_EXECUTABLE, compareArgs(forced));
+  unsetenv("CEMENTSPH_RENDER_BACKEND");
+  ASSERT_EQ(f.exitCode, 0) << f.err;
+  EXPECT_EQ(backendOf(forced / "metrics.json"), "osmesa");
 }
 
 TEST(ComparePictures, NoPicturesFlagWritesNone) {
