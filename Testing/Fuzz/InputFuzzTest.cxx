@@ -7,6 +7,8 @@
 #include "cementsph/imaging/VolumeIO.h"
 
 #include <gtest/gtest.h>
+
+#include <cstdint>
 #include <itkImageRegionIteratorWithIndex.h>
 
 #include <algorithm>
@@ -231,6 +233,31 @@ TEST_F(InputFuzz, HeaderCasesFromTheIssueAreRefused) {
   cases.push_back({"inf.nrrd", rawNrrd("1", std::numeric_limits<float>::infinity()), "infinite"});
   cases.push_back({"huge-spacing.nrrd", rawNrrd("1e300", 0.0f), "spacing"});
   cases.push_back({"four-d.nrrd", rawNrrd("1", 0.0f, "dimension: 4\nsizes: 2 2 2 2"), "4"});
+  // NIfTI-1 (4^3 float32 voxels of 100): one voxel NaN, or a NaN scale factor (scl_slope, byte 112).
+  auto nifti = [](float slope, bool nanVoxel) {
+    std::string b(352, '\0');
+    auto put = [&](std::size_t at, const void* v, std::size_t n) { std::memcpy(&b[at], v, n); };
+    const std::int32_t headerSize = 348;
+    put(0, &headerSize, 4);
+    const std::int16_t dims[8] = {3, 4, 4, 4, 1, 1, 1, 1}, datatype = 16, bitpix = 32, qform = 1;
+    put(40, dims, 16);
+    put(70, &datatype, 2);
+    put(72, &bitpix, 2);
+    const float pixdim[8] = {1, 1, 1, 1, 1, 1, 1, 1}, offset = 352, intercept = 0;
+    put(76, pixdim, 32);
+    put(108, &offset, 4);
+    put(112, &slope, 4);
+    put(116, &intercept, 4);
+    put(252, &qform, 2);
+    put(344, "n+1", 4);
+    for (int k = 0; k < 64; ++k) {
+      const float v = nanVoxel && k == 5 ? std::numeric_limits<float>::quiet_NaN() : 100.0f;
+      b.append(reinterpret_cast<const char*>(&v), 4);
+    }
+    return b;
+  };
+  cases.push_back({"nan-voxel.nii", nifti(1.0f, true), "NaN"});
+  cases.push_back({"nan-slope.nii", nifti(std::numeric_limits<float>::quiet_NaN(), false), "scl_slope"});
   // A gzip NRRD with one byte of its compressed data changed: only the checksum can tell.
   {
     const fs::path gz = dir_ / "ct.nrrd";

@@ -3,6 +3,9 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
@@ -180,9 +183,86 @@ void checkNiftiPayload(const std::string& path, std::uintmax_t imageBytes) {
   requireBytes(path, available, imageBytes + kNiftiHeaderBytes);
 }
 
+// NIfTI-1 before ITK reads it (header fields in the header's byte order, which sizeof_hdr = 348 at byte 0
+// gives):
+//  * the scaling to the stored values' units (scl_slope at byte 112, scl_inter at 116): a NaN or infinite
+//    factor makes every HU unknown (nifti_io would skip a NaN slope and hand the raw values on as HU);
+//  * floating-point voxels (datatype 16 or 64, at byte 70; the data at vox_offset, byte 108): nifti_io sets
+//    NaN and infinite voxels to 0 as it reads them, silently, so they are looked for here first.
+void checkNifti(const std::string& path) {
+  if (lower(fs::path(path).extension().string()) == ".hdr") return; // the pair's header: left to ITK
+  gzFile in = gzopen(path.c_str(), "rb"); // reads plain files too
+  if (!in) return;
+  unsigned char header[kNiftiHeaderBytes];
+  const int got = gzread(in, header, unsigned(kNiftiHeaderBytes));
+  if (got != int(kNiftiHeaderBytes)) {
+    gzclose(in);
+    return; // a short header is the payload check's to report
+  }
+  std::uint32_t size = 0;
+  std::memcpy(&size, header, 4);
+  const bool swapped = size != kNiftiHeaderBytes;
+  auto field = [&](std::size_t at, std::size_t bytes, void* out) {
+    unsigned char b[8];
+    std::memcpy(b, header + at, bytes);
+    if (swapped) std::reverse(b, b + bytes);
+    std::memcpy(out, b, bytes);
+  };
+  float slope = 0, intercept = 0, voxOffset = 0;
+  std::int16_t datatype = 0, dims[8] = {};
+  field(112, 4, &slope);
+  field(116, 4, &intercept);
+  field(108, 4, &voxOffset);
+  field(70, 2, &datatype);
+  for (int i = 0; i < 8; ++i) field(40 + 2 * std::size_t(i), 2, &dims[i]);
+  if (!std::isfinite(slope) || !std::isfinite(intercept)) {
+    gzclose(in);
+    throw std::runtime_error(path + ": NIfTI scaling scl_slope " + std::to_string(slope) + ", scl_inter " +
+                             std::to_string(intercept) + " is not finite, so no voxel's HU is known (damaged header?)");
+  }
+  const std::size_t bytes = datatype == 16 ? 4 : datatype == 64 ? 8 : 0;
+  if (bytes == 0 || !(voxOffset >= float(kNiftiHeaderBytes)) || dims[0] < 3) {
+    gzclose(in);
+    return;
+  }
+  std::uintmax_t voxels = 1;
+  for (int i = 1; i <= std::min<int>(dims[0], 7); ++i) voxels *= std::uintmax_t(std::max<std::int16_t>(dims[i], 1));
+  gzseek(in, z_off_t(voxOffset), SEEK_SET);
+  std::vector<unsigned char> chunk(bytes * 65536);
+  std::uintmax_t index = 0;
+  while (index < voxels) {
+    const std::size_t want = std::size_t(std::min<std::uintmax_t>(65536, voxels - index));
+    const int read = gzread(in, chunk.data(), unsigned(want * bytes));
+    if (read <= 0) break; // short data: the payload check reports it
+    const std::size_t n = std::size_t(read) / bytes;
+    for (std::size_t k = 0; k < n; ++k, ++index) {
+      unsigned char* v = chunk.data() + k * bytes;
+      if (swapped) std::reverse(v, v + bytes);
+      double x;
+      if (bytes == 4) {
+        float f;
+        std::memcpy(&f, v, 4);
+        x = f;
+      } else {
+        std::memcpy(&x, v, 8);
+      }
+      if (!std::isfinite(x)) {
+        gzclose(in);
+        const std::uintmax_t nx = std::uintmax_t(std::max<std::int16_t>(dims[1], 1)),
+                             ny = std::uintmax_t(std::max<std::int16_t>(dims[2], 1));
+        throw std::runtime_error(path + ": voxel (" + std::to_string(index % nx) + "," + std::to_string(index / nx % ny) +
+                                 "," + std::to_string(index / (nx * ny)) + ") is " + (std::isnan(x) ? "NaN" : "infinite") +
+                                 "; a CT must hold finite values");
+      }
+    }
+  }
+  gzclose(in);
+}
+
 } // namespace
 
 void checkHeaderBeforeItk(const std::string& path, VolumeFormat format) {
+  if (format == VolumeFormat::Nifti) checkNifti(path);
   if (format != VolumeFormat::MetaImage) return;
   const TextHeader h = readTextHeader(path, '=', "elementdatafile");
   if (!h.complete)
