@@ -100,12 +100,20 @@ int runDarcy(const DarcyOptions& o) {
     csv << "porosity,spacing_mm,viscosity_pa_s,slope_s,r2,permeability_m2,dimensionless_permeability,"
            "kozeny_carman_dimensionless,steps,wall_s,converged,intercept_m_per_s,h_over_d,drag_coefficient,integrator\n";
     csv << std::setprecision(8);
-    for (const DarcyResult& r : results)
+    for (const DarcyResult& r : results) {
+      // Never a NaN or inf in the table: a case whose fit is not finite is a failed run, named.
+      for (double x : {r.slope, r.r2, r.permeability, r.dimensionlessPermeability, r.intercept,
+                       kozenyCarmanDimensionless(r.porosity)})
+        if (!std::isfinite(x))
+          throw cementsph::sph::SimulationError("the Darcy case at porosity " + std::to_string(r.porosity) +
+                                                " gave a non-finite fit (" + std::to_string(x) +
+                                                "); nothing written for it");
       csv << r.porosity << ',' << r.input.spacing * 1e3 << ',' << r.input.viscosity << ',' << r.slope << ',' << r.r2
           << ',' << r.permeability << ',' << r.dimensionlessPermeability << ','
           << kozenyCarmanDimensionless(r.porosity) << ',' << r.steps << ',' << r.wallSeconds << ','
           << (r.converged ? 1 : 0) << ',' << r.intercept << ',' << preset.hOverD << ',' << model.dragCoefficient
           << ',' << toString(model.integrator) << '\n';
+    }
     app::writeFileAtomically(csvPath, csv.str());
   };
   DarcyBenchmark bench(model, preset.hOverD, criteria);
