@@ -9,6 +9,7 @@
 #include "CommandRegistry.h"
 #include "SceneOverrides.h"
 
+#include "cementsph/rendering/CementSlices.h"
 #include "cementsph/rendering/TipPressurePlot.h"
 
 #include "cementsph/imaging/ItkVtkBridge.h"
@@ -22,6 +23,7 @@
 
 #include <omp.h>
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <iostream>
@@ -92,6 +94,24 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
       cementsph::rendering::writeTipPressurePlot(out / "tip_pressure.csv", out / "tip_pressure.png");
       std::cout << "wrote " << (out / "tip_pressure.png").string() << "\n";
     });
+    if (std::filesystem::exists(out / "cement_labels.nrrd"))
+      picture("cement_slices.png", [&] {
+        // Through the largest leak if there is one (drawn red), else through the tip.
+        std::array<double, 3> centre{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
+        double largest = 0;
+        if (m.contains("leakage_sites"))
+          for (const auto& site : m["leakage_sites"])
+            if (site["volume_ml"].get<double>() > largest) {
+              largest = site["volume_ml"].get<double>();
+              for (int axis = 0; axis < 3; ++axis) centre[std::size_t(axis)] = site["position_mm"][axis].get<double>();
+            }
+        const auto sim = cementsph::imaging::readVolume((out / "simulated_ct.nrrd").string());
+        const auto labels = cementsph::imaging::readVolume((out / "cement_labels.nrrd").string());
+        cementsph::rendering::writeCementSlices(cementsph::imaging::toVtk(sim.GetPointer()),
+                                                cementsph::imaging::toVtk(labels.GetPointer()), centre,
+                                                out / "cement_slices.png");
+        std::cout << "wrote " << (out / "cement_slices.png").string() << "\n";
+      });
     picture("injection_pressure.png", [&] {
       cementsph::rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", out / "injection_pressure.png");
       std::cout << "wrote " << (out / "injection_pressure.png").string() << "\n";

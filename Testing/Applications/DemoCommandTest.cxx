@@ -68,6 +68,8 @@ TEST(DemoCommand, VertebraReadsTheDicomSeriesAndReportsTheLeak) {
   EXPECT_FALSE(m.at("leakage_sites").empty());
   EXPECT_NEAR(m.at("cement_volume_ml").get<double>(), 4.0, 0.04);
   EXPECT_TRUE(fs::exists(out / "inject" / "injection_pressure.png"));
+  EXPECT_TRUE(fs::exists(out / "inject" / "cement_slices.png"));  // the leak in red (CementSlices test: colours)
+  EXPECT_TRUE(fs::exists(out / "inject" / "cement_labels.nrrd"));
 }
 
 namespace {

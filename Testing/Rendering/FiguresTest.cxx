@@ -2,6 +2,7 @@
 // requested size, is not blank, matches a stored baseline, and a changed input does not match it.
 #include "RenderingTestSupport.h"
 
+#include "cementsph/rendering/CementSlices.h"
 #include "cementsph/rendering/ImageCompare.h"
 #include "cementsph/rendering/SliceComparison.h"
 #include "cementsph/rendering/SurfaceComparison.h"
@@ -11,6 +12,7 @@
 
 #include <vtkDoubleArray.h>
 #include <vtkImageData.h>
+#include <vtkPNGReader.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
@@ -259,4 +261,50 @@ TEST(InjectionPressurePlot, ReadsTheSyringeColumnsAndDrawsThem) {
   EXPECT_TRUE(readTipPressureCsv(dir / "three.csv").injectionPa.empty());
   EXPECT_THROW(writeInjectionPressurePlot(dir / "three.csv", dir / "none.png"), std::runtime_error);
   EXPECT_FALSE(std::filesystem::exists(dir / "none.png"));
+}
+
+TEST(CementSlices, GreyIsTheBoneWindowBlueIsCementRedIsLeak) {
+  // A 20^3 grid of 1 mm: 300 HU everywhere (the bone window's level: mid grey 127.5), a cement block (label 1)
+  // in x < 10 and one leaked voxel column (label 2) at x = 15, y = 10 through all z. Slices through (15, 10, 10).
+  auto ct = vtkSmartPointer<vtkImageData>::New(), labels = vtkSmartPointer<vtkImageData>::New();
+  for (auto* img : {ct.Get(), labels.Get()}) {
+    img->SetDimensions(20, 20, 20);
+    img->SetSpacing(1, 1, 1);
+    img->SetOrigin(0, 0, 0);
+  }
+  ct->AllocateScalars(VTK_FLOAT, 1);
+  labels->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 20; ++i) {
+        ct->SetScalarComponentFromDouble(i, j, k, 0, 300.0);
+        labels->SetScalarComponentFromDouble(i, j, k, 0, i < 10 ? 1 : (i == 15 && j == 10) ? 2 : 0);
+      }
+  const auto dir = scratchFolder();
+  CementSlicesOptions o;
+  o.pixelsPerPanel = 200; // 10 pixels per voxel
+  writeCementSlices(ct, labels, {15, 10, 10}, dir / "slices.png", o);
+  auto reader = vtkSmartPointer<vtkPNGReader>::New();
+  reader->SetFileName((dir / "slices.png").string().c_str());
+  reader->Update();
+  vtkImageData* png = reader->GetOutput();
+  int dims[3];
+  png->GetDimensions(dims);
+  EXPECT_EQ(dims[0], 3 * 200 + 2 * 8);
+  EXPECT_EQ(dims[1], 200);
+  auto rgb = [&](int x, int y) {
+    return std::array<int, 3>{int(png->GetScalarComponentAsDouble(x, y, 0, 0)), int(png->GetScalarComponentAsDouble(x, y, 0, 1)),
+                              int(png->GetScalarComponentAsDouble(x, y, 0, 2))};
+  };
+  // Axial panel (x to the right, y down): voxel (15, 10) is pixels 150..159 across and rows 100..109 from the
+  // top, that is rows 90..99 of the image's bottom-up rows.
+  EXPECT_EQ(rgb(155, 95), (std::array<int, 3>{230, 20, 20}));                       // leaked: red
+  const double grey = (300.0 - (300.0 - 750.0)) / 1500.0 * 255.0;                   // 127.5: the level
+  const int g = int(std::lround(grey));
+  EXPECT_EQ(rgb(185, 95), (std::array<int, 3>{g, g, g}));                           // no cement: the window's grey
+  const auto blue = rgb(50, 95);                                                    // cement in bone: half blue
+  EXPECT_EQ(blue[2], int(std::lround(0.5 * grey + 0.5 * 255)));
+  EXPECT_EQ(blue[0], int(std::lround(0.5 * grey + 0.5 * 40)));
+  EXPECT_THROW(writeCementSlices(ct, labels, {50, 10, 10}, dir / "outside.png"), std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(dir / "outside.png"));
 }

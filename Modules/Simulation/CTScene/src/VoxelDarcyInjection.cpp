@@ -2,6 +2,7 @@
 
 #include "InjectionOutputs.h"
 
+#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/SimulatedCT.h"
 #include "cementsph/sph/HagenPoiseuille.h"
 #include "cementsph/sph/Simulation.h"
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <vector>
 #include <limits>
 #include <memory>
@@ -450,6 +452,20 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   InjectionRunResult result;
   result.particles = cementVoxelsToPolyData(filling, rho0);
   result.simulatedCt = simCt;
+  if (writer.writing()) {
+    // cement_labels.nrrd on the simulated CT's grid (a label map for 3D Slicer and the cement picture):
+    // 1 where cement fills at least half a voxel's pores in bone, 2 where any cement is outside bone.
+    auto labels = imaging::MaskType::New();
+    labels->CopyInformation(simCt);
+    labels->SetRegions(simCt->GetLargestPossibleRegion());
+    labels->Allocate();
+    std::uint8_t* l = labels->GetBufferPointer();
+    for (std::size_t c = 0; c < m.count(); ++c) {
+      const bool leaked = !softTissue.empty() && softTissue[c] && filling.fill()[c] > 0;
+      l[c] = leaked ? 2 : filling.fill()[c] >= 0.5 ? 1 : 0;
+    }
+    imaging::writeMask(labels, (std::filesystem::path(o.outDir) / "cement_labels.nrrd").string());
+  }
   writer.finish(filling.time(), result.particles, simCt, tipSeries, 0.0, metrics);
   result.metrics = metrics;
   return result;

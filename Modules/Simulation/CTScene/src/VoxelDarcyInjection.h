@@ -3,7 +3,9 @@
 // the cement as filled voxels. particles_NNNN.vtp then holds one point per voxel that holds cement (its
 // centre, mm, the CT's frame) with fill_fraction, cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s,
 // viscosity_pa_s, porosity, permeability_m2, arrival_time_s, age_s, and as the particle path's arrays
-// velocity_m_per_s (the interstitial velocity q / phi) and density_kg_per_m3 (rho0: incompressible).
+// velocity_m_per_s (the interstitial velocity q / phi) and density_kg_per_m3 (rho0: incompressible). Also
+// cement_labels.nrrd: a label map on the simulated CT's grid (1 cement in bone, 2 leaked cement), which
+// `cementsph inject` draws as cement_slices.png (leaks in red) and 3D Slicer opens as a segmentation.
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"
