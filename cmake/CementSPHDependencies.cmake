@@ -4,6 +4,7 @@ find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
+find_package(NLopt REQUIRED) # cementsph plan (libnlopt-dev)
 
 # VTK 9.1: list components explicitly (see shared platform notes). The lists are kept in variables for
 # the installed CementSPHConfig.cmake, which finds the same components again.

@@ -16,6 +16,8 @@ PACKAGES=(
   plastimatch
   # tests, benchmarks, command line, JSON
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
+  # derivative-free optimisation for `cementsph plan` (issue 13)
+  libnlopt-dev
   # off-screen rendering with no X server: OSMesa first, Mesa's surfaceless EGL where it fails
   # (Modules/Rendering/OffScreen/include/cementsph/rendering/RenderBackend.h)
   libosmesa6-dev libegl-mesa0 libgl1-mesa-dri

@@ -65,6 +65,10 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
           rgb[0] = 0.5 * g + 0.5 * 40;
           rgb[1] = 0.5 * g + 0.5 * 110;
           rgb[2] = 0.5 * g + 0.5 * 255;
+        } else if (label == 3) { // a target without cement: yellow, half over the CT
+          rgb[0] = 0.5 * g + 0.5 * 255;
+          rgb[1] = 0.5 * g + 0.5 * 220;
+          rgb[2] = 0.5 * g + 0.5 * 0;
         } else if (label == 2) { // leaked: red, opaque
           rgb[0] = 230;
           rgb[1] = 20;

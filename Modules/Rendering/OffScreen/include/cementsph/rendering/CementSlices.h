@@ -16,7 +16,7 @@ struct CementSlicesOptions {
 };
 
 // ct: scalar HU image; labels: the same grid, 0 no cement, 1 cement in bone, 2 leaked cement (as
-// cement_labels.nrrd). centreMm: the slices' crossing point in the images' physical frame (axis-aligned
+// cement_labels.nrrd), 3 a target region without cement (yellow; `cementsph plan`). centreMm: the slices' crossing point in the images' physical frame (axis-aligned
 // images). Throws std::invalid_argument for images of different grids or a centre outside, std::runtime_error
 // when the PNG cannot be written (none is left).
 void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<double, 3>& centreMm,

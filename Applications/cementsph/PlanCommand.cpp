@@ -1,0 +1,159 @@
+// cementsph plan: the tip depth along a trajectory and the volume that cover a target within the syringe
+// and leakage limits (Modules/Simulation/Planning/InjectionPlanner.h). Writes DIR/plan.json (the best plan,
+// every evaluation, the optimiser's stop reason), DIR/plan.csv, DIR/convergence.png and DIR/best/ (the best
+// plan's injection, with cement_slices.png through the target: cement blue, leaks red, the uncovered target
+// yellow).
+#include "CommandRegistry.h"
+#include "OutputFiles.h"
+
+#include "cementsph/imaging/ItkVtkBridge.h"
+#include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/planning/InjectionPlanner.h"
+#include "cementsph/rendering/CementSlices.h"
+#include "cementsph/rendering/XYPlot.h"
+#include "cementsph/scene/InjectionRunner.h"
+#include "cementsph/scene/SceneConfig.h"
+
+#include <omp.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PlanArgs {
+  std::string ct, scene, out;
+  std::vector<double> entry, direction, target;
+  double targetRadiusMm = 5, minDepthMm = 0, maxDepthMm = 20, minVolumeMl = 0.5, maxVolumeMl = 4;
+  double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
+  int maxEvaluations = 40, threads = 0;
+  bool quiet = false;
+};
+
+Eigen::Vector3d vec(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
+
+cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
+  auto a = std::make_shared<PlanArgs>();
+  sub.add_option("--ct", a->ct, "CT volume in HU (file or DICOM directory)")->required();
+  sub.add_option("--scene", a->scene, "Scene file: cement, rate, viscosity, model keys (tip and volume are planned)")->required();
+  sub.add_option("--out", a->out, "Output directory (plan.json, plan.csv, convergence.png, best/)")->required();
+  sub.add_option("--entry-mm", a->entry, "Trajectory entry point x,y,z in mm (the CT's LPS frame)")->delimiter(',')->expected(3)->required();
+  sub.add_option("--direction", a->direction, "Trajectory direction x,y,z, into the bone")->delimiter(',')->expected(3)->required();
+  sub.add_option("--min-depth-mm", a->minDepthMm, "Shallowest tip along the trajectory (mm from the entry)");
+  sub.add_option("--max-depth-mm", a->maxDepthMm, "Deepest tip along the trajectory (mm from the entry)");
+  sub.add_option("--target-mm", a->target, "Target sphere centre x,y,z in mm")->delimiter(',')->expected(3)->required();
+  sub.add_option("--target-radius-mm", a->targetRadiusMm, "Target sphere radius in mm");
+  sub.add_option("--min-volume-ml", a->minVolumeMl, "Smallest volume to consider (ml)");
+  sub.add_option("--max-volume-ml", a->maxVolumeMl, "Volume budget (ml)");
+  sub.add_option("--max-syringe-mpa", a->maxSyringeMpa, "Syringe pressure limit (MPa)");
+  sub.add_option("--max-leakage-ml", a->maxLeakageMl, "Leakage limit (ml; 0: none allowed)");
+  sub.add_option("--max-evaluations", a->maxEvaluations, "Injections the optimiser may run");
+  sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
+  sub.add_flag("--quiet", a->quiet, "No line per evaluation");
+  return [a]() {
+    using namespace cementsph;
+    planning::PlanRequest r;
+    // The scene's tip and volume are the plan's to choose: the entry stands in for the tip while reading it.
+    r.scene = scene::loadSceneFile(a->scene, {"tip_mm=[" + std::to_string(a->entry[0]) + "," + std::to_string(a->entry[1]) +
+                                                  "," + std::to_string(a->entry[2]) + "]"});
+    r.entryMm = vec(a->entry);
+    r.direction = vec(a->direction);
+    r.minDepthMm = a->minDepthMm;
+    r.maxDepthMm = a->maxDepthMm;
+    r.targetCentreMm = vec(a->target);
+    r.targetRadiusMm = a->targetRadiusMm;
+    r.minVolumeMl = a->minVolumeMl;
+    r.maxVolumeMl = a->maxVolumeMl;
+    r.maxSyringeMpa = a->maxSyringeMpa;
+    r.maxLeakageMl = a->maxLeakageMl;
+    r.maxEvaluations = a->maxEvaluations;
+    if (a->threads > 0) omp_set_num_threads(a->threads);
+    const auto image = imaging::readVolume(a->ct);
+    r.validate(image); // before anything is written
+    const planning::PlanResult plan = planning::planInjection(image, r, [&](const planning::PlanEvaluation& e) {
+      if (a->quiet) return;
+      std::cerr << "plan " << e.index << ": depth " << e.depthMm << " mm, " << e.volumeMl << " ml: coverage "
+                << e.coverage << ", syringe " << e.syringeMpa << " MPa, leak " << e.leakageMl << " ml"
+                << (e.failure.empty() ? "" : " (" + e.failure + ")") << "\n";
+    });
+    const fs::path out(a->out);
+    fs::create_directories(out);
+    app::writeFileAtomically(out / "plan.json", plan.toJson(r).dump(2) + "\n");
+    app::writeFileAtomically(out / "plan.csv", plan.csv());
+    int status = 0;
+    try {
+      rendering::PlotSpec spec;
+      spec.title = "Plan: objective per evaluation";
+      spec.xLabel = "evaluation";
+      spec.yLabel = "coverage - penalties";
+      rendering::PlotSeries each, best;
+      each.name = "evaluation";
+      each.style = rendering::PlotSeries::Style::Points;
+      best.name = "best so far";
+      best.style = rendering::PlotSeries::Style::Line;
+      best.rgb = {214, 39, 40};
+      double sofar = -1e300;
+      for (const auto& e : plan.evaluations) {
+        each.x.push_back(e.index);
+        each.y.push_back(e.objective);
+        sofar = std::max(sofar, e.objective);
+        best.x.push_back(e.index);
+        best.y.push_back(sofar);
+      }
+      spec.series = {each, best};
+      rendering::writePlotPng(spec, out / "convergence.png");
+    } catch (const std::exception& e) {
+      std::cerr << "cementsph plan: picture convergence.png not written (the numbers are): " << e.what() << "\n";
+      status = 3;
+    }
+    // The best plan's injection, its files and its picture with the target.
+    if (plan.best.failure.empty()) {
+      scene::SceneConfig s = r.scene;
+      s.tipMm = plan.best.tipMm;
+      s.direction = r.direction.normalized();
+      s.volumeMl = plan.best.volumeMl;
+      scene::InjectionRunOptions o;
+      o.outDir = (out / "best").string();
+      const scene::InjectionRunResult run = scene::runInjection(image, s, o);
+      try {
+        const auto labels = imaging::readVolume((out / "best" / "cement_labels.nrrd").string());
+        auto target = imaging::toVtk(labels.GetPointer());
+        // The target's voxels without cement as label 3 (yellow).
+        int dims[3];
+        target->GetDimensions(dims);
+        for (int k = 0; k < dims[2]; ++k)
+          for (int j = 0; j < dims[1]; ++j)
+            for (int i = 0; i < dims[0]; ++i) {
+              double p[3];
+              const int ijk[3] = {i, j, k};
+              target->TransformContinuousIndexToPhysicalPoint(ijk[0], ijk[1], ijk[2], p);
+              if ((Eigen::Vector3d(p[0], p[1], p[2]) - r.targetCentreMm).norm() <= r.targetRadiusMm &&
+                  target->GetScalarComponentAsDouble(i, j, k, 0) == 0)
+                target->SetScalarComponentFromDouble(i, j, k, 0, 3);
+            }
+        rendering::writeCementSlices(imaging::toVtk(run.simulatedCt.GetPointer()), target,
+                                     {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()},
+                                     out / "best" / "cement_slices.png");
+      } catch (const std::exception& e) {
+        std::cerr << "cementsph plan: picture best/cement_slices.png not written (the numbers are): " << e.what() << "\n";
+        status = 3;
+      }
+    }
+    const auto& b = plan.best;
+    std::cout << "plan: depth " << b.depthMm << " mm (tip " << b.tipMm.x() << "," << b.tipMm.y() << "," << b.tipMm.z()
+              << " mm), " << b.volumeMl << " ml: coverage " << b.coverage << ", syringe " << b.syringeMpa
+              << " MPa, leak " << b.leakageMl << " ml, " << (b.withinLimits ? "within" : "OUTSIDE") << " the limits; "
+              << plan.evaluations.size() << " injections, " << plan.stopReason << "; results in " << a->out << "\n";
+    return status;
+  };
+}
+
+} // namespace
+
+CEMENTSPH_REGISTER_COMMAND(plan, "plan",
+                           "Plan an injection: the tip depth along a trajectory and the volume that cover a target "
+                           "within syringe-pressure and leakage limits (NLopt BOBYQA over full injections)",
+                           setupPlan)

@@ -1,0 +1,199 @@
+#include "cementsph/planning/InjectionPlanner.h"
+
+#include "cementsph/scene/InjectionRunner.h"
+
+#include <nlopt.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace cementsph::planning {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+std::string mm(const Eigen::Vector3d& p) {
+  std::ostringstream s;
+  s << std::setprecision(6) << "(" << p.x() << ", " << p.y() << ", " << p.z() << ") mm";
+  return s.str();
+}
+
+bool insideCt(const imaging::ImageType* ct, const Eigen::Vector3d& pMm) {
+  imaging::ImageType::PointType p;
+  for (unsigned a = 0; a < 3; ++a) p[a] = pMm[int(a)];
+  imaging::ImageType::IndexType i;
+  return ct->TransformPhysicalPointToIndex(p, i);
+}
+
+const char* stopText(nlopt_result r) {
+  switch (r) {
+  case NLOPT_SUCCESS: return "success";
+  case NLOPT_STOPVAL_REACHED: return "objective reached the stop value";
+  case NLOPT_FTOL_REACHED: return "objective converged (ftol)";
+  case NLOPT_XTOL_REACHED: return "plan converged: depth within 0.25 mm and volume within 0.05 ml (xtol)";
+  case NLOPT_MAXEVAL_REACHED: return "the evaluation budget ran out (max evaluations)";
+  case NLOPT_MAXTIME_REACHED: return "the time budget ran out";
+  case NLOPT_ROUNDOFF_LIMITED: return "round-off limited";
+  case NLOPT_FORCED_STOP: return "stopped";
+  default: return "NLopt failed";
+  }
+}
+
+struct Context {
+  const imaging::ImageType* ct;
+  const PlanRequest* request;
+  const std::function<void(const PlanEvaluation&)>* onEvaluation;
+  PlanResult* result;
+};
+
+double evaluate(unsigned, const double* x, double*, void* data) {
+  auto* c = static_cast<Context*>(data);
+  const PlanRequest& r = *c->request;
+  PlanEvaluation e;
+  e.index = int(c->result->evaluations.size());
+  e.depthMm = x[0];
+  e.volumeMl = x[1];
+  e.tipMm = r.entryMm + x[0] * r.direction.normalized();
+  try {
+    scene::SceneConfig s = r.scene;
+    s.tipMm = e.tipMm;
+    s.direction = r.direction.normalized();
+    s.volumeMl = x[1];
+    s.snapshotIntervalS = 1e9;
+    const scene::InjectionRunResult run = scene::runInjection(c->ct, s, {});
+    e.coverage = targetCoverage(run.particles, r.targetCentreMm, r.targetRadiusMm);
+    e.syringeMpa = run.metrics.value("max_injection_pressure_pa", 0.0) * 1e-6;
+    e.leakageMl = run.metrics.value("leakage_volume_ml", 0.0);
+    const double penalty = std::max(0.0, e.syringeMpa / r.maxSyringeMpa - 1.0) +
+                           std::max(0.0, e.leakageMl - r.maxLeakageMl) / 0.1;
+    e.withinLimits = penalty <= 0.0;
+    e.objective = e.coverage - 5.0 * penalty;
+  } catch (const std::exception& ex) {
+    e.failure = ex.what();
+    e.objective = -1.0;
+  }
+  c->result->evaluations.push_back(e);
+  const PlanEvaluation& best = c->result->best;
+  if (c->result->evaluations.size() == 1 || e.objective > best.objective) c->result->best = e;
+  if (*c->onEvaluation) (*c->onEvaluation)(e);
+  return e.objective;
+}
+} // namespace
+
+void PlanRequest::validate(const imaging::ImageType* ct) const {
+  if (!ct) throw std::invalid_argument("plan: no CT");
+  if (!(direction.norm() > 0) || !direction.allFinite()) throw std::invalid_argument("--direction must be a non-zero vector");
+  if (!entryMm.allFinite() || !insideCt(ct, entryMm))
+    throw std::invalid_argument("--entry-mm " + mm(entryMm) + " lies outside the CT");
+  if (!(minDepthMm >= 0 && maxDepthMm > minDepthMm && maxDepthMm < 1000))
+    throw std::invalid_argument("--min-depth-mm and --max-depth-mm must satisfy 0 <= min < max < 1000 mm");
+  const Eigen::Vector3d deepest = entryMm + maxDepthMm * direction.normalized();
+  if (!insideCt(ct, deepest))
+    throw std::invalid_argument("the trajectory leaves the CT: the deepest tip " + mm(deepest) +
+                                " (--max-depth-mm along --direction) is outside it");
+  if (!(targetRadiusMm > 0 && targetRadiusMm < 100)) throw std::invalid_argument("--target-radius-mm must be in (0, 100) mm");
+  if (!targetCentreMm.allFinite() || !insideCt(ct, targetCentreMm))
+    throw std::invalid_argument("--target-mm " + mm(targetCentreMm) + " lies outside the CT");
+  if (!(minVolumeMl > 0 && maxVolumeMl >= minVolumeMl && maxVolumeMl <= 50))
+    throw std::invalid_argument("--min-volume-ml and --max-volume-ml must satisfy 0 < min <= max <= 50 ml");
+  if (!(maxSyringeMpa > 0 && maxSyringeMpa < 100)) throw std::invalid_argument("--max-syringe-mpa must be in (0, 100) MPa");
+  if (!(maxLeakageMl >= 0 && maxLeakageMl < 50)) throw std::invalid_argument("--max-leakage-ml must be in [0, 50) ml");
+  if (maxEvaluations < 3 || maxEvaluations > 10000) throw std::invalid_argument("--max-evaluations must be 3 .. 10000");
+}
+
+double targetCoverage(vtkPolyData* points, const Eigen::Vector3d& centre, double radius) {
+  if (!points) return 0.0;
+  auto* volume = points->GetPointData()->GetArray("cement_volume_mm3");
+  auto* fill = points->GetPointData()->GetArray("fill_fraction");
+  auto* porosity = points->GetPointData()->GetArray("porosity");
+  if (!volume || !fill || !porosity) throw std::invalid_argument("target coverage: the injection has no cement voxels");
+  double covered = 0;
+  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
+    const double* x = points->GetPoint(i);
+    if ((Eigen::Vector3d(x[0], x[1], x[2]) - centre).norm() > radius) continue;
+    const double f = fill->GetTuple1(i), phi = porosity->GetTuple1(i);
+    if (f >= 0.5 && phi > 0) covered += volume->GetTuple1(i) / (f * phi); // the voxel's volume
+  }
+  return std::min(1.0, covered / (4.0 / 3.0 * kPi * radius * radius * radius));
+}
+
+PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& r,
+                         const std::function<void(const PlanEvaluation&)>& onEvaluation) {
+  r.validate(ct);
+  PlanResult result;
+  Context context{ct, &r, &onEvaluation, &result};
+  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 2);
+  const double lower[2] = {r.minDepthMm, r.minVolumeMl}, upper[2] = {r.maxDepthMm, r.maxVolumeMl};
+  nlopt_set_lower_bounds(opt, lower);
+  nlopt_set_upper_bounds(opt, upper);
+  nlopt_set_max_objective(opt, evaluate, &context);
+  const double xtol[2] = {0.25, 0.05};
+  nlopt_set_xtol_abs(opt, xtol);
+  nlopt_set_maxeval(opt, r.maxEvaluations);
+  const double step[2] = {std::max(0.5, 0.25 * (r.maxDepthMm - r.minDepthMm)),
+                          std::max(0.05, 0.25 * (r.maxVolumeMl - r.minVolumeMl))};
+  nlopt_set_initial_step(opt, step);
+  double x[2] = {0.5 * (r.minDepthMm + r.maxDepthMm), r.maxVolumeMl};
+  double value = 0;
+  const nlopt_result code = nlopt_optimize(opt, x, &value);
+  nlopt_destroy(opt);
+  result.stopReason = stopText(code);
+  if (code < 0 && result.evaluations.empty()) throw std::runtime_error("plan: NLopt failed before any evaluation");
+  return result;
+}
+
+nlohmann::json PlanEvaluation::toJson() const {
+  return {{"index", index},
+          {"depth_mm", depthMm},
+          {"volume_ml", volumeMl},
+          {"tip_mm", {tipMm.x(), tipMm.y(), tipMm.z()}},
+          {"coverage", coverage},
+          {"max_syringe_pressure_mpa", syringeMpa},
+          {"leakage_volume_ml", leakageMl},
+          {"objective", objective},
+          {"within_limits", withinLimits},
+          {"failure", failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure)}};
+}
+
+nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
+  nlohmann::json evaluationsJson = nlohmann::json::array();
+  for (const auto& e : evaluations) evaluationsJson.push_back(e.toJson());
+  return {{"best", best.toJson()},
+          {"evaluations", evaluationsJson},
+          {"stop_reason", stopReason},
+          {"optimiser", "NLopt LN_BOBYQA"},
+          {"request",
+           {{"entry_mm", {r.entryMm.x(), r.entryMm.y(), r.entryMm.z()}},
+            {"direction", {r.direction.x(), r.direction.y(), r.direction.z()}},
+            {"depth_range_mm", {r.minDepthMm, r.maxDepthMm}},
+            {"target_mm", {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()}},
+            {"target_radius_mm", r.targetRadiusMm},
+            {"volume_range_ml", {r.minVolumeMl, r.maxVolumeMl}},
+            {"max_syringe_pressure_mpa", r.maxSyringeMpa},
+            {"max_leakage_ml", r.maxLeakageMl},
+            {"max_evaluations", r.maxEvaluations}}},
+          {"mpi_ranks", 1},
+          {"frame", "the CT's patient frame, LPS mm"}};
+}
+
+std::string PlanResult::csv() const {
+  std::ostringstream s;
+  s << "index,depth_mm,volume_ml,tip_x_mm,tip_y_mm,tip_z_mm,coverage,max_syringe_pressure_mpa,leakage_volume_ml,"
+       "objective,within_limits,failure\n"
+    << std::setprecision(10);
+  for (const auto& e : evaluations) {
+    std::string failure = e.failure;
+    std::replace(failure.begin(), failure.end(), '"', '\'');
+    s << e.index << ',' << e.depthMm << ',' << e.volumeMl << ',' << e.tipMm.x() << ',' << e.tipMm.y() << ','
+      << e.tipMm.z() << ',' << e.coverage << ',' << e.syringeMpa << ',' << e.leakageMl << ',' << e.objective << ','
+      << (e.withinLimits ? 1 : 0) << ",\"" << failure << "\"\n";
+  }
+  return s.str();
+}
+
+} // namespace cementsph::planning

@@ -1,0 +1,101 @@
+// `cementsph plan` (InjectionPlanner.h):
+//  * targetCoverage against the volume of a ball: cement voxels of 1 mm filling a ball of radius 8 mm cover a
+//    target ball of 5 mm completely, and a target of 10 mm by (8/10)^3, within 3 % (lattice counting);
+//  * on the vertebra phantom, a transpedicular trajectory, a target sphere in the body and no leakage
+//    allowed: the best plan's tip lies inside the target, it holds the limits (no leak, syringe under
+//    3 MPa), it covers most of the target, and plan.json / plan.csv list every evaluation;
+//  * a trajectory that leaves the CT is one clear line, exit 1, and nothing written.
+#include "ProgramRun.h"
+#include "cementsph/planning/InjectionPlanner.h"
+
+#include <gtest/gtest.h>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+vtkSmartPointer<vtkPolyData> ballOfCement(double radiusMm) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  auto volume = vtkSmartPointer<vtkDoubleArray>::New(), fill = vtkSmartPointer<vtkDoubleArray>::New(),
+       porosity = vtkSmartPointer<vtkDoubleArray>::New();
+  volume->SetName("cement_volume_mm3");
+  fill->SetName("fill_fraction");
+  porosity->SetName("porosity");
+  const int n = int(radiusMm) + 1;
+  for (int k = -n; k <= n; ++k)
+    for (int j = -n; j <= n; ++j)
+      for (int i = -n; i <= n; ++i)
+        if (std::sqrt(double(i * i + j * j + k * k)) <= radiusMm) {
+          points->InsertNextPoint(i, j, k);
+          volume->InsertNextValue(0.9 * 0.8); // fill 0.9 of a 1 mm^3 voxel of porosity 0.8
+          fill->InsertNextValue(0.9);
+          porosity->InsertNextValue(0.8);
+        }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->GetPointData()->AddArray(volume);
+  poly->GetPointData()->AddArray(fill);
+  poly->GetPointData()->AddArray(porosity);
+  return poly;
+}
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / name;
+  fs::remove_all(p);
+  return p;
+}
+const fs::path kData = CEMENTSPH_TEST_DATA_DIR;
+} // namespace
+
+TEST(Plan, CoverageIsTheTargetsVolumeFraction) {
+  const auto cement = ballOfCement(8.0);
+  EXPECT_NEAR(cementsph::planning::targetCoverage(cement, Eigen::Vector3d::Zero(), 5.0), 1.0, 0.03);
+  EXPECT_NEAR(cementsph::planning::targetCoverage(cement, Eigen::Vector3d::Zero(), 10.0), 0.512, 0.03 * 0.512);
+  EXPECT_DOUBLE_EQ(cementsph::planning::targetCoverage(cement, Eigen::Vector3d(30, 0, 0), 5.0), 0.0);
+}
+
+TEST(Plan, OnTheVertebraTheTipLandsInTheTargetWithinTheLimits) {
+  const fs::path out = scratch("plan-vertebra");
+  const Eigen::Vector3d target(32, 21, 22.5);
+  const auto r = cementsph::testing::runProgram(
+      CEMENTSPH_EXECUTABLE,
+      {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
+       "--entry-mm", "41,49.08,22.5", "--direction", "-0.3,-0.954,0", "--min-depth-mm", "10", "--max-depth-mm", "30",
+       "--target-mm", "32,21,22.5", "--target-radius-mm", "6", "--min-volume-ml", "1", "--max-volume-ml", "4",
+       "--max-syringe-mpa", "3", "--max-leakage-ml", "0", "--quiet", "--out", out.string()});
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::ifstream in(out / "plan.json");
+  const auto plan = nlohmann::json::parse(in);
+  const auto& best = plan.at("best");
+  const Eigen::Vector3d tip(best["tip_mm"][0].get<double>(), best["tip_mm"][1].get<double>(), best["tip_mm"][2].get<double>());
+  EXPECT_LT((tip - target).norm(), 6.0) << tip.transpose();
+  EXPECT_TRUE(best.at("within_limits").get<bool>());
+  EXPECT_DOUBLE_EQ(best.at("leakage_volume_ml").get<double>(), 0.0);
+  EXPECT_LT(best.at("max_syringe_pressure_mpa").get<double>(), 3.0);
+  EXPECT_GT(best.at("coverage").get<double>(), 0.8);
+  ASSERT_GE(plan.at("evaluations").size(), 3u);
+  for (const auto& e : plan.at("evaluations")) EXPECT_LE(e.at("objective").get<double>(), best.at("objective").get<double>());
+  EXPECT_FALSE(plan.at("stop_reason").get<std::string>().empty());
+  std::ifstream csv(out / "plan.csv");
+  std::size_t rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, plan.at("evaluations").size() + 1);
+  for (const char* f : {"convergence.png", "best/metrics.json", "best/cement_slices.png"}) EXPECT_TRUE(fs::exists(out / f)) << f;
+}
+
+TEST(Plan, ATrajectoryThatLeavesTheCtIsOneClearLine) {
+  const fs::path out = scratch("plan-bad");
+  const auto r = cementsph::testing::runProgram(
+      CEMENTSPH_EXECUTABLE,
+      {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
+       "--entry-mm", "41,49.08,22.5", "--direction", "-0.3,-0.954,0", "--max-depth-mm", "200", "--target-mm", "32,21,22.5",
+       "--out", out.string()});
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("leaves the CT"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
