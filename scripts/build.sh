@@ -6,6 +6,9 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$here/build}"
 bash "$here/scripts/install-deps.sh"
 mkdir -p "$build"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release > "$build/configure.log" 2>&1 ||
+# ccache, where the machine has it, makes rebuilds (and several worktrees) cheap; it is optional.
+launcher=()
+if command -v ccache >/dev/null 2>&1; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" > "$build/configure.log" 2>&1 ||
   { cat "$build/configure.log"; echo "build.sh: configure failed" >&2; exit 1; }
 cmake --build "$build" -j"$(nproc)"

@@ -18,6 +18,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # derivative-free optimisation for `cementsph plan` (issue 13)
   libnlopt-dev
+  # studies and plans spread over ranks under mpirun (issue 13): Open MPI
+  openmpi-bin libopenmpi-dev
   # off-screen rendering with no X server: OSMesa first, Mesa's surfaceless EGL where it fails
   # (Modules/Rendering/OffScreen/include/cementsph/rendering/RenderBackend.h)
   libosmesa6-dev libegl-mesa0 libgl1-mesa-dri
