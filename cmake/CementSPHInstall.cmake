@@ -11,7 +11,7 @@ set(CEMENTSPH_EXPORTED_LIBRARIES
   CementSPH_SPH:SPH CementSPH_VoxelDarcy:VoxelDarcy CementSPH_Rendering:Rendering CementSPH_SurfaceMetrics:SurfaceMetrics
   CementSPH_ImagingIO:ImagingIO CementSPH_Registration:Registration CementSPH_Segmentation:Segmentation
   CementSPH_Scene:Scene CementSPH_CTScene:CTScene CementSPH_Phantom:Phantom CementSPH_Study:Study
-  CementSPH_Planning:Planning
+  CementSPH_Planning:Planning CementSPH_Parallel:Parallel
   CementSPH_DRR:DRR
   # Static libraries carry their private usage requirements into the export ($<LINK_ONLY:...>), so the
   # two interface targets of compile flags go along (they add nothing to a consumer's link).

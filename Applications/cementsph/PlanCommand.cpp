@@ -8,6 +8,7 @@
 
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/planning/InjectionPlanner.h"
 #include "cementsph/rendering/CementSlices.h"
 #include "cementsph/rendering/XYPlot.h"
@@ -16,6 +17,7 @@
 
 #include <omp.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -29,7 +31,7 @@ struct PlanArgs {
   std::vector<double> entry, direction, target;
   double targetRadiusMm = 5, minDepthMm = 0, maxDepthMm = 20, minVolumeMl = 0.5, maxVolumeMl = 4;
   double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
-  int maxEvaluations = 40, threads = 0;
+  int maxEvaluations = 40, starts = 3, threads = 0;
   bool quiet = false;
 };
 
@@ -50,35 +52,49 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
   sub.add_option("--max-volume-ml", a->maxVolumeMl, "Volume budget (ml)");
   sub.add_option("--max-syringe-mpa", a->maxSyringeMpa, "Syringe pressure limit (MPa)");
   sub.add_option("--max-leakage-ml", a->maxLeakageMl, "Leakage limit (ml; 0: none allowed)");
-  sub.add_option("--max-evaluations", a->maxEvaluations, "Injections the optimiser may run");
+  sub.add_option("--max-evaluations", a->maxEvaluations, "Injections the optimiser may run, over all starts");
+  sub.add_option("--starts", a->starts,
+                 "Independent BOBYQA starts spread along the trajectory (under mpirun, one per free rank at a time)");
   sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
   sub.add_flag("--quiet", a->quiet, "No line per evaluation");
   return [a]() {
     using namespace cementsph;
-    planning::PlanRequest r;
-    // The scene's tip and volume are the plan's to choose: the entry stands in for the tip while reading it.
-    r.scene = scene::loadSceneFile(a->scene, {"tip_mm=[" + std::to_string(a->entry[0]) + "," + std::to_string(a->entry[1]) +
-                                                  "," + std::to_string(a->entry[2]) + "]"});
-    r.entryMm = vec(a->entry);
-    r.direction = vec(a->direction);
-    r.minDepthMm = a->minDepthMm;
-    r.maxDepthMm = a->maxDepthMm;
-    r.targetCentreMm = vec(a->target);
-    r.targetRadiusMm = a->targetRadiusMm;
-    r.minVolumeMl = a->minVolumeMl;
-    r.maxVolumeMl = a->maxVolumeMl;
-    r.maxSyringeMpa = a->maxSyringeMpa;
-    r.maxLeakageMl = a->maxLeakageMl;
-    r.maxEvaluations = a->maxEvaluations;
+    // Under mpirun the starts are shared among the ranks (Modules/Parallel/CaseFarm); rank 0 writes.
+    parallel::CaseFarm& farm = parallel::caseFarm();
     if (a->threads > 0) omp_set_num_threads(a->threads);
-    const auto image = imaging::readVolume(a->ct);
-    r.validate(image); // before anything is written
-    const planning::PlanResult plan = planning::planInjection(image, r, [&](const planning::PlanEvaluation& e) {
-      if (a->quiet) return;
-      std::cerr << "plan " << e.index << ": depth " << e.depthMm << " mm, " << e.volumeMl << " ml: coverage "
-                << e.coverage << ", syringe " << e.syringeMpa << " MPa, leak " << e.leakageMl << " ml"
-                << (e.failure.empty() ? "" : " (" + e.failure + ")") << "\n";
+    else if (farm.ranks() > 1 && !std::getenv("OMP_NUM_THREADS"))
+      omp_set_num_threads(farm.threadsPerRank(omp_get_num_procs()));
+    planning::PlanRequest r;
+    imaging::ImageType::Pointer image;
+    farm.agree([&] {
+      // The scene's tip and volume are the plan's to choose: the entry stands in for the tip while reading it.
+      r.scene = scene::loadSceneFile(a->scene, {"tip_mm=[" + std::to_string(a->entry[0]) + "," +
+                                                    std::to_string(a->entry[1]) + "," + std::to_string(a->entry[2]) + "]"});
+      r.entryMm = vec(a->entry);
+      r.direction = vec(a->direction);
+      r.minDepthMm = a->minDepthMm;
+      r.maxDepthMm = a->maxDepthMm;
+      r.targetCentreMm = vec(a->target);
+      r.targetRadiusMm = a->targetRadiusMm;
+      r.minVolumeMl = a->minVolumeMl;
+      r.maxVolumeMl = a->maxVolumeMl;
+      r.maxSyringeMpa = a->maxSyringeMpa;
+      r.maxLeakageMl = a->maxLeakageMl;
+      r.maxEvaluations = a->maxEvaluations;
+      r.starts = a->starts;
+      image = imaging::readVolume(a->ct);
+      r.validate(image); // before anything is written
     });
+    const planning::PlanResult plan = planning::planInjection(
+        image, r,
+        [&](const planning::PlanEvaluation& e) {
+          if (a->quiet) return;
+          std::cerr << "plan " << e.index << " (start " << e.start << "): depth " << e.depthMm << " mm, " << e.volumeMl
+                    << " ml: coverage " << e.coverage << ", syringe " << e.syringeMpa << " MPa, leak " << e.leakageMl
+                    << " ml" << (e.failure.empty() ? "" : " (" + e.failure + ")") << "\n";
+        },
+        &farm);
+    if (!farm.coordinator()) return 0; // a worker: its starts went to rank 0
     const fs::path out(a->out);
     fs::create_directories(out);
     app::writeFileAtomically(out / "plan.json", plan.toJson(r).dump(2) + "\n");
@@ -146,7 +162,9 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
     std::cout << "plan: depth " << b.depthMm << " mm (tip " << b.tipMm.x() << "," << b.tipMm.y() << "," << b.tipMm.z()
               << " mm), " << b.volumeMl << " ml: coverage " << b.coverage << ", syringe " << b.syringeMpa
               << " MPa, leak " << b.leakageMl << " ml, " << (b.withinLimits ? "within" : "OUTSIDE") << " the limits; "
-              << plan.evaluations.size() << " injections, " << plan.stopReason << "; results in " << a->out << "\n";
+              << plan.evaluations.size() << " injections in " << plan.starts.size() << " starts"
+              << (plan.mpiRanks > 1 ? " over " + std::to_string(plan.mpiRanks) + " MPI ranks" : std::string()) << ", "
+              << plan.stopReason << "; results in " << a->out << "\n";
     return status;
   };
 }

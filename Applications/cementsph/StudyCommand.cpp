@@ -14,6 +14,7 @@
 
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/scene/RunEstimate.h"
 #include "cementsph/scene/SceneConfig.h"
 #include "cementsph/study/StudyPlots.h"
@@ -27,6 +28,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -116,58 +118,72 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
 
   return [a, &sub]() {
     const auto start = std::chrono::steady_clock::now();
-    // 1. Everything that can be checked before a run: options, scene, output folder, CT, reference.
-    if (a->threads < 0) throw std::invalid_argument("--threads: " + std::to_string(a->threads) + " is negative");
-    if (a->noRegistration && a->referenceCt.empty())
-      throw std::invalid_argument("--no-registration needs --reference-ct");
-    if (!a->referenceCt.empty() && a->noSizeStudy)
-      throw std::invalid_argument("--reference-ct scores the size study, but --no-size-study turns it off");
-    study::StudyPlan plan;
-    plan.baseScene = scene::loadSceneFile(a->scene, app::sceneOverrides(sub, a->scene_overrides));
-    plan.sizeStudy = !a->noSizeStudy;
-    plan.radiiMm = a->radiiMm;
-    plan.integrators = a->integrators;
-    plan.viscositiesPaS = a->viscositiesPaS;
-    plan.referenceIsCt = !a->referenceCt.empty();
-    plan.validate();
-    const fs::path out(a->out);
-    checkOutputFolder(out);
+    // Under mpirun the ranks share the injections (Modules/Parallel/CaseFarm): every rank reads and checks
+    // the inputs, rank 0 alone scores the runs and writes; without mpirun this process runs them all.
+    parallel::CaseFarm& farm = parallel::caseFarm();
     if (a->threads > 0) omp_set_num_threads(a->threads);
-    const auto ct = imaging::readVolume(a->ct);
-    {
-      const auto spacing = ct->GetSpacing();
-      std::vector<study::StudyRunSpec> runs = plan.sizeStudy ? plan.sizeRuns() : std::vector<study::StudyRunSpec>{};
-      for (const auto& run : plan.viscosityRuns()) runs.push_back(run);
-      for (const auto& run : runs) {
-        const std::string note = scene::checkRunSize(
-            scene::estimateRun(run.scene(plan.baseScene), spacing[0] * spacing[1] * spacing[2]), a->allowLarge);
-        if (!note.empty()) std::cerr << "cementsph study: run " << run.name() << ": " << note << "\n";
-      }
-    }
+    else if (farm.ranks() > 1 && !std::getenv("OMP_NUM_THREADS"))
+      omp_set_num_threads(farm.threadsPerRank(omp_get_num_procs()));
+    study::StudyPlan plan;
+    const fs::path out(a->out);
+    imaging::ImageType::Pointer ct;
+    std::unique_ptr<study::StudyRunner> runner;
     study::StudyOptions options;
-    if (a->keepRuns) options.keepRunsDir = (out / "runs").string();
-    study::StudyRunner runner(ct, plan, options);
-
     std::string reference;
-    if (plan.referenceIsCt) {
-      const auto post = imaging::readVolume(a->referenceCt);
-      const study::AlignedPost aligned = study::alignPostOntoPre(ct, post, !a->noRegistration);
-      study::AnalysedCement cement = runner.analyse(aligned.volume);
-      if (!cement.found())
-        throw std::runtime_error(a->referenceCt + ": no cement found (reference minus CT " +
-                                 imaging::describeThresholdRule(options.segmentation) + ", at the tip)");
-      reference = "the post-operative CT `" + a->referenceCt + "`, " +
-                  (a->noRegistration ? std::string("resampled onto the CT without registration")
-                                     : std::string("registered onto the CT as `compare` does (affine, cement masked)")) +
-                  "; its cement: " + fmt(cement.segmentation.volumeMl, "%.3f") + " ml, mean spreading distance " +
-                  fmt(cement.spreadingMm, "%.2f") + " mm";
-      runner.setReference(std::move(cement));
-    } else if (plan.sizeStudy) {
-      for (const auto& run : plan.sizeRuns())
-        if (run.reference)
-          reference = "the finest run, " + run.integrator + " at r " + study::radiusLabel(run.particleRadiusMm) +
-                      " mm (the smallest radius with the most faithful integrator listed: central-difference, "
-                      "then explicit, then overdamped); it runs first";
+    // 1. Everything that can be checked before a run: options, scene, output folder, CT, reference.
+    farm.agree([&] {
+      if (a->threads < 0) throw std::invalid_argument("--threads: " + std::to_string(a->threads) + " is negative");
+      if (a->noRegistration && a->referenceCt.empty())
+        throw std::invalid_argument("--no-registration needs --reference-ct");
+      if (!a->referenceCt.empty() && a->noSizeStudy)
+        throw std::invalid_argument("--reference-ct scores the size study, but --no-size-study turns it off");
+      plan.baseScene = scene::loadSceneFile(a->scene, app::sceneOverrides(sub, a->scene_overrides));
+      plan.sizeStudy = !a->noSizeStudy;
+      plan.radiiMm = a->radiiMm;
+      plan.integrators = a->integrators;
+      plan.viscositiesPaS = a->viscositiesPaS;
+      plan.referenceIsCt = !a->referenceCt.empty();
+      plan.validate();
+      checkOutputFolder(out);
+      ct = imaging::readVolume(a->ct);
+      {
+        const auto spacing = ct->GetSpacing();
+        std::vector<study::StudyRunSpec> runs = plan.sizeStudy ? plan.sizeRuns() : std::vector<study::StudyRunSpec>{};
+        for (const auto& run : plan.viscosityRuns()) runs.push_back(run);
+        for (const auto& run : runs) {
+          const std::string note = scene::checkRunSize(
+              scene::estimateRun(run.scene(plan.baseScene), spacing[0] * spacing[1] * spacing[2]), a->allowLarge);
+          if (!note.empty() && farm.coordinator())
+            std::cerr << "cementsph study: run " << run.name() << ": " << note << "\n";
+        }
+      }
+      if (a->keepRuns) options.keepRunsDir = (out / "runs").string();
+      runner = std::make_unique<study::StudyRunner>(ct, plan, options);
+      // The reference is scored on rank 0 only: the workers need not read or register it.
+      if (plan.referenceIsCt && farm.coordinator()) {
+        const auto post = imaging::readVolume(a->referenceCt);
+        const study::AlignedPost aligned = study::alignPostOntoPre(ct, post, !a->noRegistration);
+        study::AnalysedCement cement = runner->analyse(aligned.volume);
+        if (!cement.found())
+          throw std::runtime_error(a->referenceCt + ": no cement found (reference minus CT " +
+                                   imaging::describeThresholdRule(options.segmentation) + ", at the tip)");
+        reference = "the post-operative CT `" + a->referenceCt + "`, " +
+                    (a->noRegistration ? std::string("resampled onto the CT without registration")
+                                       : std::string("registered onto the CT as `compare` does (affine, cement masked)")) +
+                    "; its cement: " + fmt(cement.segmentation.volumeMl, "%.3f") + " ml, mean spreading distance " +
+                    fmt(cement.spreadingMm, "%.2f") + " mm";
+        runner->setReference(std::move(cement));
+      } else if (plan.sizeStudy) {
+        for (const auto& run : plan.sizeRuns())
+          if (run.reference)
+            reference = "the finest run, " + run.integrator + " at r " + study::radiusLabel(run.particleRadiusMm) +
+                        " mm (the smallest radius with the most faithful integrator listed: central-difference, "
+                        "then explicit, then overdamped); it runs first";
+      }
+    });
+    if (!farm.coordinator()) { // a worker: injections only
+      runner->runStudy(farm);
+      return 0;
     }
 
     // 2. The runs; after each, every table is rewritten (atomically) and one progress line printed.
@@ -188,7 +204,10 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
           "CT `" + a->ct + "`; scene `" + a->scene + "` as run: " + fmt(s.volumeMl, "%g") + " ml at " +
               fmt(s.flowRateMlPerS, "%g") + " ml/s, " + fmt(s.viscosityPaS, "%g") + " Pa.s, model preset " +
               s.modelPreset + ", tip (" + fmt((*s.tipMm)[0], "%g") + ", " + fmt((*s.tipMm)[1], "%g") + ", " +
-              fmt((*s.tipMm)[2], "%g") + ") mm; " + std::to_string(threads) + " OpenMP thread(s).",
+              fmt((*s.tipMm)[2], "%g") + ") mm; " + std::to_string(threads) + " OpenMP thread(s)" +
+              (farm.ranks() > 1 ? " per rank, " + std::to_string(farm.ranks()) +
+                                      " MPI ranks (rank 0 scores and writes, the others inject)."
+                                : std::string(".")),
           "Cement in every volume: minus the CT, " + imaging::describeThresholdRule(options.segmentation) +
               ", the component at the tip, as `cementsph compare` segments it."};
       if (!sizeRows.empty())
@@ -218,7 +237,8 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
       j["viscosities_pa_s"] = plan.viscositiesPaS;
       j["reference"] = plan.sizeStudy ? json(reference) : json(nullptr);
       j["reference_ct"] = plan.referenceIsCt ? json(a->referenceCt) : json(nullptr);
-      j["threads"] = threads;
+      j["threads"] = threads; // OpenMP threads of each rank
+      j["mpi_ranks"] = farm.ranks();
       j["size_runs_done"] = sizeRows.size();
       j["viscosity_runs_done"] = viscosityRows.size();
       j["runs_wall_time_s"] = runsWall();
@@ -226,16 +246,18 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
       imaging::writeTextAtomically((out / "study.json").string(), j.dump(2) + "\n");
     };
     int status = 0;
-    auto track = [&](std::vector<study::StudyRow>& into, const char* what) {
-      return [&into, &status, &writeTables, what](const std::vector<study::StudyRow>& rows, std::size_t planned) {
-        into = rows;
-        if (!rows.back().ok()) status = 3;
-        writeTables();
-        std::cerr << progressLine(rows.back(), rows.size(), planned, what) << std::endl;
-      };
-    };
-    if (plan.sizeStudy) runner.runSizeStudy(track(sizeRows, "size"));
-    if (!plan.viscositiesPaS.empty()) runner.runViscositySweep(track(viscosityRows, "viscosity"));
+    const std::size_t sizePlanned = plan.sizeStudy ? plan.sizeRuns().size() : 0;
+    const std::size_t viscosityPlanned = plan.viscosityRuns().size();
+    runner->runStudy(farm, [&](const std::vector<study::StudyRow>& rows, std::size_t) {
+      const study::StudyRow& last = rows.back();
+      const bool size = last.spec.sweep == study::StudyRunSpec::Sweep::ParticleSize;
+      auto& into = size ? sizeRows : viscosityRows;
+      into.push_back(last);
+      if (!last.ok()) status = 3;
+      writeTables();
+      std::cerr << progressLine(last, into.size(), size ? sizePlanned : viscosityPlanned, size ? "size" : "viscosity")
+                << (farm.ranks() > 1 ? " [rank " + std::to_string(last.rank) + "]" : std::string()) << std::endl;
+    });
     writeTables();
 
     // 3. Pictures, after the tables, so a rendering failure never loses the numbers (exit 3, as compare).

@@ -1,5 +1,6 @@
 // cementsph: the command-line front end. `cementsph --help` lists the subcommands.
 #include "CommandRegistry.h"
+#include "cementsph/parallel/CaseFarm.h"
 
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/LibraryMessages.h"
@@ -106,6 +107,10 @@ int main(int argc, char** argv) {
   // SIGXFSZ killing the process with a partial file.
   std::signal(SIGXFSZ, SIG_IGN);
   chooseDefaultThreads();
+  // Under mpirun every rank runs the command; rank 0 reports the errors (a worker's own reach it through
+  // the case farm), so a bad option is one line, not one per rank.
+  const bool quietRank = cementsph::parallel::launchedByMpi() && cementsph::parallel::launchedRank() != 0;
+  if (quietRank) std::cerr.setstate(std::ios::failbit);
   CLI::App app{"CementSPH: predicts how PMMA bone cement spreads through porous bone (SPH, "
                "Basafa et al. 2013) and checks it against CT.",
                "cementsph"};
@@ -147,6 +152,8 @@ int main(int argc, char** argv) {
     const std::string prefix = "cementsph " + sub->get_name() + ": error: ";
     try {
       return run();
+    } catch (const cementsph::parallel::FarmStopped&) { // a worker rank: rank 0 says why
+      return kBadInput;
     } catch (const CLI::ParseError& e) { // a subcommand run by another one (demo: inject, compare)
       std::cerr << prefix << singleLine(e.what()) << "\n";
       return kBadInput;

@@ -1,6 +1,7 @@
 // `cementsph study` as a user meets it, on the bundled foam phantom with a tiny volume: the files, one row
 // per run in the CSV and the Markdown, the progress lines, no temporaries; and bad options: one line, a
 // non-zero exit, no output folder.
+#include "PhantomTip.h"
 #include "ProgramRun.h"
 
 #include <gtest/gtest.h>
@@ -38,14 +39,7 @@ fs::path scratch(const std::string& name) {
   return p;
 }
 
-std::string phantomTip() {
-  std::ifstream in(kData / "foam-phantom" / "truth.json");
-  const auto tip = nlohmann::json::parse(in).at("injection").at("tip_mm");
-  std::ostringstream s;
-  s.precision(17);
-  s << tip[0].get<double>() << "," << tip[1].get<double>() << "," << tip[2].get<double>();
-  return s.str();
-}
+std::string phantomTip() { return cementsph::testing::foamPhantomTipArgument(kData); }
 
 // The study command on the phantom with the given extra arguments.
 std::vector<std::string> studyArgs(const fs::path& out, std::vector<std::string> extra, const std::string& tip = "",

@@ -1,5 +1,6 @@
 #include "cementsph/planning/InjectionPlanner.h"
 
+#include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include <nlopt.h>
@@ -11,6 +12,8 @@
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 namespace cementsph::planning {
 
@@ -47,15 +50,16 @@ const char* stopText(nlopt_result r) {
 struct Context {
   const imaging::ImageType* ct;
   const PlanRequest* request;
-  const std::function<void(const PlanEvaluation&)>* onEvaluation;
-  PlanResult* result;
+  int start;
+  std::vector<PlanEvaluation>* evaluations;
 };
 
 double evaluate(unsigned, const double* x, double*, void* data) {
   auto* c = static_cast<Context*>(data);
   const PlanRequest& r = *c->request;
   PlanEvaluation e;
-  e.index = int(c->result->evaluations.size());
+  e.index = int(c->evaluations->size());
+  e.start = c->start;
   e.depthMm = x[0];
   e.volumeMl = x[1];
   e.tipMm = r.entryMm + x[0] * r.direction.normalized();
@@ -77,11 +81,56 @@ double evaluate(unsigned, const double* x, double*, void* data) {
     e.failure = ex.what();
     e.objective = -1.0;
   }
-  c->result->evaluations.push_back(e);
-  const PlanEvaluation& best = c->result->best;
-  if (c->result->evaluations.size() == 1 || e.objective > best.objective) c->result->best = e;
-  if (*c->onEvaluation) (*c->onEvaluation)(e);
+  c->evaluations->push_back(e);
   return e.objective;
+}
+
+// Where start s of K begins: its share of the depth range, at its middle, and the largest volume.
+std::pair<double, double> startPoint(const PlanRequest& r, int s) {
+  return {r.minDepthMm + (s + 0.5) * (r.maxDepthMm - r.minDepthMm) / r.starts, r.maxVolumeMl};
+}
+
+// One start's local search: its evaluations (numbered within the start) and NLopt's stop reason, as JSON
+// (the bytes a worker rank sends back; doubles read back to the same bits).
+nlohmann::json runStart(const imaging::ImageType* ct, const PlanRequest& r, int start) {
+  std::vector<PlanEvaluation> evaluations;
+  Context context{ct, &r, start, &evaluations};
+  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 2);
+  const double lower[2] = {r.minDepthMm, r.minVolumeMl}, upper[2] = {r.maxDepthMm, r.maxVolumeMl};
+  nlopt_set_lower_bounds(opt, lower);
+  nlopt_set_upper_bounds(opt, upper);
+  nlopt_set_max_objective(opt, evaluate, &context);
+  const double xtol[2] = {0.25, 0.05};
+  nlopt_set_xtol_abs(opt, xtol);
+  nlopt_set_maxeval(opt, r.maxEvaluations / r.starts);
+  const double step[2] = {std::max(0.5, 0.25 * (r.maxDepthMm - r.minDepthMm) / r.starts),
+                          std::max(0.05, 0.25 * (r.maxVolumeMl - r.minVolumeMl))};
+  nlopt_set_initial_step(opt, step);
+  const auto [depth, volume] = startPoint(r, start);
+  double x[2] = {depth, volume};
+  double value = 0;
+  const nlopt_result code = nlopt_optimize(opt, x, &value);
+  nlopt_destroy(opt);
+  nlohmann::json out{{"stop_reason", stopText(code)}, {"evaluations", nlohmann::json::array()}};
+  for (const auto& e : evaluations) out["evaluations"].push_back(e.toJson());
+  return out;
+}
+
+PlanEvaluation evaluationFromJson(const nlohmann::json& j) {
+  PlanEvaluation e;
+  e.index = j.at("index").get<int>();
+  e.start = j.at("start").get<int>();
+  e.depthMm = j.at("depth_mm").get<double>();
+  e.volumeMl = j.at("volume_ml").get<double>();
+  const auto& tip = j.at("tip_mm");
+  e.tipMm = Eigen::Vector3d(tip[0].get<double>(), tip[1].get<double>(), tip[2].get<double>());
+  e.coverage = j.at("coverage").get<double>();
+  e.syringeMpa = j.at("max_syringe_pressure_mpa").get<double>();
+  e.leakageMl = j.at("leakage_volume_ml").get<double>();
+  e.objective = j.at("objective").get<double>();
+  e.withinLimits = j.at("within_limits").get<bool>();
+  e.failure = j.at("failure").is_null() ? std::string() : j.at("failure").get<std::string>();
+  return e;
 }
 } // namespace
 
@@ -103,7 +152,11 @@ void PlanRequest::validate(const imaging::ImageType* ct) const {
     throw std::invalid_argument("--min-volume-ml and --max-volume-ml must satisfy 0 < min <= max <= 50 ml");
   if (!(maxSyringeMpa > 0 && maxSyringeMpa < 100)) throw std::invalid_argument("--max-syringe-mpa must be in (0, 100) MPa");
   if (!(maxLeakageMl >= 0 && maxLeakageMl < 50)) throw std::invalid_argument("--max-leakage-ml must be in [0, 50) ml");
-  if (maxEvaluations < 3 || maxEvaluations > 10000) throw std::invalid_argument("--max-evaluations must be 3 .. 10000");
+  if (starts < 1 || starts > 64) throw std::invalid_argument("--starts must be 1 .. 64");
+  if (maxEvaluations > 10000 || maxEvaluations / starts < 6)
+    throw std::invalid_argument("--max-evaluations must be at most 10000 and give each of the " +
+                                std::to_string(starts) + " starts at least 6 injections (BOBYQA's 5 to begin with, "
+                                "and one more): at least " + std::to_string(6 * starts));
 }
 
 double targetCoverage(vtkPolyData* points, const Eigen::Vector3d& centre, double radius) {
@@ -123,32 +176,53 @@ double targetCoverage(vtkPolyData* points, const Eigen::Vector3d& centre, double
 }
 
 PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& r,
-                         const std::function<void(const PlanEvaluation&)>& onEvaluation) {
+                         const std::function<void(const PlanEvaluation&)>& onEvaluation, parallel::CaseFarm* farm) {
   r.validate(ct);
   PlanResult result;
-  Context context{ct, &r, &onEvaluation, &result};
-  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 2);
-  const double lower[2] = {r.minDepthMm, r.minVolumeMl}, upper[2] = {r.maxDepthMm, r.maxVolumeMl};
-  nlopt_set_lower_bounds(opt, lower);
-  nlopt_set_upper_bounds(opt, upper);
-  nlopt_set_max_objective(opt, evaluate, &context);
-  const double xtol[2] = {0.25, 0.05};
-  nlopt_set_xtol_abs(opt, xtol);
-  nlopt_set_maxeval(opt, r.maxEvaluations);
-  const double step[2] = {std::max(0.5, 0.25 * (r.maxDepthMm - r.minDepthMm)),
-                          std::max(0.05, 0.25 * (r.maxVolumeMl - r.minVolumeMl))};
-  nlopt_set_initial_step(opt, step);
-  double x[2] = {0.5 * (r.minDepthMm + r.maxDepthMm), r.maxVolumeMl};
-  double value = 0;
-  const nlopt_result code = nlopt_optimize(opt, x, &value);
-  nlopt_destroy(opt);
-  result.stopReason = stopText(code);
-  if (code < 0 && result.evaluations.empty()) throw std::runtime_error("plan: NLopt failed before any evaluation");
+  result.mpiRanks = farm ? farm->ranks() : 1;
+  auto work = [&](std::size_t start) { return runStart(ct, r, int(start)).dump(); };
+  auto onOutcome = [&](const parallel::CaseOutcome& outcome) {
+    PlanStart start;
+    start.index = int(outcome.index);
+    std::tie(start.depthMm, start.volumeMl) = startPoint(r, start.index);
+    start.rank = outcome.rank;
+    if (!outcome.ok) {
+      start.stopReason = "failed: " + outcome.payload;
+    } else {
+      const nlohmann::json j = nlohmann::json::parse(outcome.payload);
+      start.stopReason = j.at("stop_reason").get<std::string>();
+      for (const auto& ej : j.at("evaluations")) {
+        PlanEvaluation e = evaluationFromJson(ej);
+        e.index = int(result.evaluations.size());
+        result.evaluations.push_back(e);
+        if (result.evaluations.size() == 1 || e.objective > result.best.objective) result.best = e;
+        ++start.evaluations;
+        if (onEvaluation) onEvaluation(e);
+      }
+    }
+    result.starts.push_back(start);
+  };
+  if (farm) farm->run(std::size_t(r.starts), work, onOutcome);
+  else parallel::runCasesHere(std::size_t(r.starts), work, onOutcome);
+  if (farm && !farm->coordinator()) return result;
+  if (result.evaluations.empty()) {
+    std::string why;
+    for (const auto& s : result.starts) why += (why.empty() ? "" : "; ") + s.stopReason;
+    throw std::runtime_error("plan: no start made an evaluation (" + why + ")");
+  }
+  result.stopReason = "start " + std::to_string(result.best.start) + " (the best plan's): " +
+                      result.starts[std::size_t(result.best.start)].stopReason;
   return result;
+}
+
+nlohmann::json PlanStart::toJson() const {
+  return {{"index", index},       {"depth_mm", depthMm},         {"volume_ml", volumeMl},
+          {"rank", rank},         {"stop_reason", stopReason},   {"evaluations", evaluations}};
 }
 
 nlohmann::json PlanEvaluation::toJson() const {
   return {{"index", index},
+          {"start", start},
           {"depth_mm", depthMm},
           {"volume_ml", volumeMl},
           {"tip_mm", {tipMm.x(), tipMm.y(), tipMm.z()}},
@@ -163,10 +237,13 @@ nlohmann::json PlanEvaluation::toJson() const {
 nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
   nlohmann::json evaluationsJson = nlohmann::json::array();
   for (const auto& e : evaluations) evaluationsJson.push_back(e.toJson());
+  nlohmann::json startsJson = nlohmann::json::array();
+  for (const auto& s : starts) startsJson.push_back(s.toJson());
   return {{"best", best.toJson()},
           {"evaluations", evaluationsJson},
           {"stop_reason", stopReason},
-          {"optimiser", "NLopt LN_BOBYQA"},
+          {"optimiser", "NLopt LN_BOBYQA, " + std::to_string(starts.size()) + " starts along the trajectory"},
+          {"starts", startsJson},
           {"request",
            {{"entry_mm", {r.entryMm.x(), r.entryMm.y(), r.entryMm.z()}},
             {"direction", {r.direction.x(), r.direction.y(), r.direction.z()}},
@@ -176,20 +253,21 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
             {"volume_range_ml", {r.minVolumeMl, r.maxVolumeMl}},
             {"max_syringe_pressure_mpa", r.maxSyringeMpa},
             {"max_leakage_ml", r.maxLeakageMl},
-            {"max_evaluations", r.maxEvaluations}}},
-          {"mpi_ranks", 1},
+            {"max_evaluations", r.maxEvaluations},
+            {"starts", r.starts}}},
+          {"mpi_ranks", mpiRanks},
           {"frame", "the CT's patient frame, LPS mm"}};
 }
 
 std::string PlanResult::csv() const {
   std::ostringstream s;
-  s << "index,depth_mm,volume_ml,tip_x_mm,tip_y_mm,tip_z_mm,coverage,max_syringe_pressure_mpa,leakage_volume_ml,"
+  s << "index,start,depth_mm,volume_ml,tip_x_mm,tip_y_mm,tip_z_mm,coverage,max_syringe_pressure_mpa,leakage_volume_ml,"
        "objective,within_limits,failure\n"
     << std::setprecision(10);
   for (const auto& e : evaluations) {
     std::string failure = e.failure;
     std::replace(failure.begin(), failure.end(), '"', '\'');
-    s << e.index << ',' << e.depthMm << ',' << e.volumeMl << ',' << e.tipMm.x() << ',' << e.tipMm.y() << ','
+    s << e.index << ',' << e.start << ',' << e.depthMm << ',' << e.volumeMl << ',' << e.tipMm.x() << ',' << e.tipMm.y() << ','
       << e.tipMm.z() << ',' << e.coverage << ',' << e.syringeMpa << ',' << e.leakageMl << ',' << e.objective << ','
       << (e.withinLimits ? 1 : 0) << ",\"" << failure << "\"\n";
   }

@@ -78,7 +78,7 @@ std::string sizeStudyCsv(const std::vector<StudyRow>& rows) {
          "expected_fluid_particles,fixed_particles,escaped_particles,volume_injected_ml,simulated_time_s,"
          "particle_spreading_distance_mm,cement_volume_ml,cement_spreading_distance_mm,surface_error_mm,"
          "hausdorff95_mm,dice,spreading_difference_mm,max_tip_pressure_pa,fluid_in_solid_fraction,analysis_time_s,"
-         "failure\n";
+         "failure,rank\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const StudyRow& r = rows[i];
     csv << i + 1 << ',' << r.spec.integrator << ',' << num(r.spec.particleRadiusMm) << ',' << (r.spec.reference ? 1 : 0)
@@ -91,7 +91,7 @@ std::string sizeStudyCsv(const std::vector<StudyRow>& rows) {
         << num(cementValue(r, r.cementSpreadingMm)) << ',' << num(r.errors.surfaceErrorMm) << ','
         << num(r.errors.hausdorff95Mm) << ',' << num(r.errors.dice) << ',' << num(r.errors.spreadingDifferenceMm)
         << ',' << num(okValue(r, r.maxTipPressurePa)) << ',' << num(okValue(r, r.fluidInSolidFraction)) << ','
-        << num(okValue(r, r.analysisTimeS)) << ',' << text(r.failure) << '\n';
+        << num(okValue(r, r.analysisTimeS)) << ',' << text(r.failure) << ',' << r.rank << '\n';
   }
   return csv.str();
 }
@@ -100,7 +100,7 @@ std::string viscosityCsv(const std::vector<StudyRow>& rows) {
   std::ostringstream csv;
   csv << "viscosity_pa_s,particle_radius_mm,integrator,status,particle_spreading_distance_mm,"
          "cement_spreading_distance_mm,cement_volume_ml,max_tip_pressure_pa,steps,wall_time_s,real_time_factor,"
-         "fluid_particles,fixed_particles,escaped_particles,fluid_in_solid_fraction,failure\n";
+         "fluid_particles,fixed_particles,escaped_particles,fluid_in_solid_fraction,failure,rank\n";
   for (const StudyRow& r : rows) {
     csv << num(r.spec.viscosityPaS) << ',' << num(r.spec.particleRadiusMm) << ',' << r.spec.integrator << ','
         << (r.ok() ? "ok" : "failed") << ',' << num(okValue(r, r.particleSpreadingMm)) << ','
@@ -109,7 +109,7 @@ std::string viscosityCsv(const std::vector<StudyRow>& rows) {
         << num(okValue(r, r.wallTimeS)) << ',' << num(okValue(r, r.realTimeFactor)) << ','
         << num(okValue(r, r.fluidParticles)) << ',' << num(okValue(r, r.fixedParticles)) << ','
         << num(okValue(r, r.escapedParticles)) << ',' << num(okValue(r, r.fluidInSolidFraction)) << ','
-        << text(r.failure) << '\n';
+        << text(r.failure) << ',' << r.rank << '\n';
   }
   return csv.str();
 }

@@ -5,11 +5,13 @@
 #include "cementsph/study/StudyRunner.h"
 
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/sph/Simulation.h"
 
 #include <itkIdentityTransform.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <stdexcept>
@@ -38,25 +40,36 @@ AnalysedCement StudyRunner::analyse(const imaging::ImageType* volume) const {
   return analyseCement(onGrid, ct_, options_.segmentation, {tip[0], tip[1], tip[2]}, options_.smoothingVoxels);
 }
 
-StudyRow StudyRunner::run(const StudyRunSpec& spec, AnalysedCement* cement) const {
-  StudyRow row;
-  row.spec = spec;
+SimulatedRun StudyRunner::simulate(const StudyRunSpec& spec) const {
   const scene::SceneConfig scene = spec.scene(plan_.baseScene);
-  const double d = scene.spacingM();
-  row.expectedParticles = scene.volumeM3() / (d * d * d);
-
   scene::InjectionRunOptions runOptions;
   runOptions.huPerRelativeDensity = options_.huPerRelativeDensity;
   if (!options_.keepRunsDir.empty())
     runOptions.outDir = (std::filesystem::path(options_.keepRunsDir) / spec.name()).string();
-  scene::InjectionRunResult result;
+  SimulatedRun simulated;
   try {
-    result = scene::runInjection(ct_, scene, runOptions);
+    scene::InjectionRunResult result = scene::runInjection(ct_, scene, runOptions);
+    simulated.metrics = std::move(result.metrics);
+    simulated.simulatedCt = result.simulatedCt;
   } catch (const sph::SimulationError& e) {
-    row.failure = e.what();
+    simulated.failure = e.what();
+  }
+  return simulated;
+}
+
+StudyRow StudyRunner::score(const StudyRunSpec& spec, const SimulatedRun& simulated, int rank,
+                            AnalysedCement* cement) const {
+  StudyRow row;
+  row.spec = spec;
+  row.rank = rank;
+  const scene::SceneConfig scene = spec.scene(plan_.baseScene);
+  const double d = scene.spacingM();
+  row.expectedParticles = scene.volumeM3() / (d * d * d);
+  if (!simulated.failure.empty() || !simulated.simulatedCt) {
+    row.failure = simulated.failure.empty() ? "no simulated CT" : simulated.failure;
     return row;
   }
-  const auto& m = result.metrics;
+  const auto& m = simulated.metrics;
   row.wallTimeS = m.at("wall_time_s").get<double>();
   row.realTimeFactor = m.at("real_time_factor").get<double>();
   row.simulatedTimeS = m.at("simulated_time_s").get<double>();
@@ -70,7 +83,7 @@ StudyRow StudyRunner::run(const StudyRunSpec& spec, AnalysedCement* cement) cons
   row.fluidInSolidFraction = m.at("fluid_in_solid_fraction").get<double>();
 
   const auto start = std::chrono::steady_clock::now();
-  AnalysedCement c = analyse(result.simulatedCt);
+  AnalysedCement c = analyse(simulated.simulatedCt);
   row.cementFound = c.found();
   row.cementVolumeMl = c.segmentation.volumeMl;
   row.cementSpreadingMm = c.spreadingMm;
@@ -82,32 +95,54 @@ StudyRow StudyRunner::run(const StudyRunSpec& spec, AnalysedCement* cement) cons
   return row;
 }
 
-std::vector<StudyRow> StudyRunner::runSizeStudy(const RowCallback& afterEachRun) {
-  if (plan_.referenceIsCt && !reference_)
+StudyRow StudyRunner::run(const StudyRunSpec& spec, AnalysedCement* cement) const {
+  return score(spec, simulate(spec), 0, cement);
+}
+
+std::vector<StudyRow> StudyRunner::runCases(const std::vector<StudyRunSpec>& specs, parallel::CaseFarm* farm,
+                                            const RowCallback& afterEachRun) {
+  const bool sizeRuns = std::any_of(specs.begin(), specs.end(), [](const StudyRunSpec& s) {
+    return s.sweep == StudyRunSpec::Sweep::ParticleSize;
+  });
+  if (sizeRuns && plan_.referenceIsCt && !reference_)
     throw std::logic_error("StudyRunner: the plan's reference is a CT, but none was set");
-  const std::vector<StudyRunSpec> specs = plan_.sizeRuns();
   std::vector<StudyRow> rows;
-  for (const StudyRunSpec& spec : specs) {
-    if (spec.reference) {
+  // The reference run comes first in the plan, so it is scored (and becomes the reference) before any run
+  // that is scored against it.
+  auto onOutcome = [&](const parallel::CaseOutcome& outcome) {
+    const StudyRunSpec& spec = specs[outcome.index];
+    if (!outcome.ok) {
+      SimulatedRun failed;
+      failed.failure = (farm && farm->ranks() > 1 ? "rank " + std::to_string(outcome.rank) + ": " : std::string()) +
+                       outcome.payload;
+      rows.push_back(score(spec, failed, outcome.rank));
+    } else if (spec.reference) {
       AnalysedCement cement;
-      rows.push_back(run(spec, &cement));
+      rows.push_back(score(spec, decodeSimulatedRun(outcome.payload), outcome.rank, &cement));
       if (rows.back().ok()) reference_ = std::move(cement);
     } else {
-      rows.push_back(run(spec));
+      rows.push_back(score(spec, decodeSimulatedRun(outcome.payload), outcome.rank));
     }
     if (afterEachRun) afterEachRun(rows, specs.size());
-  }
+  };
+  auto work = [&](std::size_t i) { return encodeSimulatedRun(simulate(specs[i])); };
+  if (farm) farm->run(specs.size(), work, onOutcome);
+  else parallel::runCasesHere(specs.size(), work, onOutcome);
   return rows;
 }
 
+std::vector<StudyRow> StudyRunner::runSizeStudy(const RowCallback& afterEachRun) {
+  return runCases(plan_.sizeRuns(), nullptr, afterEachRun);
+}
+
 std::vector<StudyRow> StudyRunner::runViscositySweep(const RowCallback& afterEachRun) {
-  const std::vector<StudyRunSpec> specs = plan_.viscosityRuns();
-  std::vector<StudyRow> rows;
-  for (const StudyRunSpec& spec : specs) {
-    rows.push_back(run(spec));
-    if (afterEachRun) afterEachRun(rows, specs.size());
-  }
-  return rows;
+  return runCases(plan_.viscosityRuns(), nullptr, afterEachRun);
+}
+
+std::vector<StudyRow> StudyRunner::runStudy(parallel::CaseFarm& farm, const RowCallback& afterEachRun) {
+  std::vector<StudyRunSpec> specs = plan_.sizeStudy ? plan_.sizeRuns() : std::vector<StudyRunSpec>{};
+  for (const StudyRunSpec& spec : plan_.viscosityRuns()) specs.push_back(spec);
+  return runCases(specs, &farm, afterEachRun);
 }
 
 } // namespace cementsph::study

@@ -9,7 +9,12 @@
 // bounds. Objective (maximised): coverage - 5 (max(0, p_syringe / p_max - 1) + max(0, leak - leak_max) / 0.1 ml),
 // coverage the fraction of the target sphere's volume in voxels at least half filled with cement. A plan
 // whose injection cannot run (a tip in cortex, outside the CT) scores -1 and says why.
-// Not done: a second tip.
+//
+// Several starts (multi-start BOBYQA): start s of K begins at depth min + (s + 1/2)(max - min)/K and the
+// largest volume, with the evaluation budget shared equally; the best plan of all starts wins (the first
+// on a tie). A trajectory through bone with cortex, canal and soft tissue is a rugged landscape: one local
+// search settles in the first basin it finds. The starts are independent, so under mpirun they run on the
+// worker ranks (parallel::CaseFarm), with the same evaluations as one process makes one after another.
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"
@@ -23,6 +28,10 @@
 #include <string>
 #include <vector>
 
+namespace cementsph::parallel {
+class CaseFarm;
+}
+
 namespace cementsph::planning {
 
 struct PlanRequest {
@@ -34,7 +43,8 @@ struct PlanRequest {
   double targetRadiusMm = 5.0;
   double minVolumeMl = 0.5, maxVolumeMl = 4.0;  // the volume budget
   double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
-  int maxEvaluations = 40;
+  int maxEvaluations = 40;                      // over all starts
+  int starts = 3;                               // independent BOBYQA starts along the trajectory
   // Throws std::invalid_argument (one line naming the option) for bounds out of order, a zero direction,
   // a target or trajectory that leaves the CT.
   void validate(const imaging::ImageType* ct) const;
@@ -42,6 +52,7 @@ struct PlanRequest {
 
 struct PlanEvaluation {
   int index = 0;
+  int start = 0;    // the start it belongs to
   double depthMm = 0, volumeMl = 0;
   Eigen::Vector3d tipMm = Eigen::Vector3d::Zero();
   double coverage = 0, syringeMpa = 0, leakageMl = 0, objective = -1;
@@ -50,10 +61,22 @@ struct PlanEvaluation {
   nlohmann::json toJson() const;
 };
 
+// One start's local search.
+struct PlanStart {
+  int index = 0;
+  double depthMm = 0, volumeMl = 0; // where it began
+  int rank = 0;                     // the MPI rank that ran it (0 in one process)
+  std::string stopReason;           // NLopt's, or why the start failed
+  int evaluations = 0;
+  nlohmann::json toJson() const;
+};
+
 struct PlanResult {
   PlanEvaluation best;
-  std::vector<PlanEvaluation> evaluations;
-  std::string stopReason;
+  std::vector<PlanEvaluation> evaluations;  // every start's, in start order
+  std::vector<PlanStart> starts;
+  std::string stopReason;                   // the best plan's start's
+  int mpiRanks = 1;
   nlohmann::json toJson(const PlanRequest& request) const;
   std::string csv() const; // one row per evaluation
 };
@@ -62,7 +85,10 @@ struct PlanResult {
 // particles: cement_volume_mm3, fill_fraction and porosity per voxel centre).
 double targetCoverage(vtkPolyData* cementVoxels, const Eigen::Vector3d& centreMm, double radiusMm);
 
+// Every rank of an MPI job calls it (farm: parallel::caseFarm()); the result is complete on rank 0 only.
+// onEvaluation sees each evaluation on rank 0, a start's all at once as that start comes in.
 PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& request,
-                         const std::function<void(const PlanEvaluation&)>& onEvaluation = {});
+                         const std::function<void(const PlanEvaluation&)>& onEvaluation = {},
+                         parallel::CaseFarm* farm = nullptr);
 
 } // namespace cementsph::planning

@@ -14,13 +14,13 @@ namespace cementsph::study {
 // reference, status, wall_time_s, real_time_factor, steps, fluid_particles, expected_fluid_particles,
 // fixed_particles, escaped_particles, volume_injected_ml, simulated_time_s, particle_spreading_distance_mm,
 // cement_volume_ml, cement_spreading_distance_mm, surface_error_mm, hausdorff95_mm, dice,
-// spreading_difference_mm, max_tip_pressure_pa, fluid_in_solid_fraction, analysis_time_s, failure.
+// spreading_difference_mm, max_tip_pressure_pa, fluid_in_solid_fraction, analysis_time_s, failure, rank.
 std::string sizeStudyCsv(const std::vector<StudyRow>& rows);
 
 // spreading_vs_viscosity.csv: one row per viscosity. Columns: viscosity_pa_s, particle_radius_mm,
 // integrator, status, particle_spreading_distance_mm, cement_spreading_distance_mm, cement_volume_ml,
 // max_tip_pressure_pa, steps, wall_time_s, real_time_factor, fluid_particles, fixed_particles,
-// escaped_particles, fluid_in_solid_fraction, failure.
+// escaped_particles, fluid_in_solid_fraction, failure, rank.
 std::string viscosityCsv(const std::vector<StudyRow>& rows);
 
 // A Markdown table of the size study (one row per run, the reference marked) and, when given, of the

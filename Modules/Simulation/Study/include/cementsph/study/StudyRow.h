@@ -16,6 +16,7 @@ struct StudyRow {
   StudyRunSpec spec;
   std::string failure;              // empty: the run finished
   bool ok() const { return failure.empty(); }
+  int rank = 0;                     // the MPI rank that ran the injection (0 in a serial study)
 
   // From the inject runner (metrics.json keys in brackets).
   double wallTimeS = 0;             // [wall_time_s], porous-solid set-up included

@@ -7,7 +7,13 @@
 // the reference one.
 //
 // A run whose engine goes unstable (sph::SimulationError) is kept as a failed row and the study goes on;
-// any other error (bad scene, tip in solid, output failure) is thrown.
+// so is a run that failed for any other reason but bad input (its failure says why). Bad input (a bad
+// scene, a tip in solid: std::invalid_argument) stops the study and is thrown.
+//
+// The runs may be spread over the ranks of an MPI job (parallel::CaseFarm): each injection runs on a worker
+// rank, which sends back its metrics and simulated CT (SimulatedRun, encoded as bytes); rank 0 segments,
+// measures and scores every run in plan order, so the rows are the same as a serial study's, number for
+// number (the wall times and the rank column aside).
 #pragma once
 
 #include "cementsph/imaging/CementSegmentation.h"
@@ -16,12 +22,29 @@
 #include "cementsph/study/StudyPlan.h"
 #include "cementsph/study/StudyRow.h"
 
+#include <nlohmann/json.hpp>
+
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
+namespace cementsph::parallel {
+class CaseFarm;
+}
+
 namespace cementsph::study {
+
+// One injection of a study before its cement is analysed: what a worker rank sends back.
+struct SimulatedRun {
+  std::string failure;                      // the engine went unstable (empty: it finished)
+  nlohmann::json metrics;                   // the inject runner's metrics.json
+  imaging::ImageType::Pointer simulatedCt;  // null when it failed
+};
+// Bytes and back: the metrics as JSON (doubles read back to the same bits), the image's geometry and its
+// voxels as they are. decode throws std::runtime_error for bytes that are not an encoded run.
+std::string encodeSimulatedRun(const SimulatedRun& run);
+SimulatedRun decodeSimulatedRun(const std::string& bytes);
 
 struct StudyOptions {
   // Segmentation of every cement (the injection point is set to the scene's tip).
@@ -47,9 +70,17 @@ public:
 
   std::vector<StudyRow> runSizeStudy(const RowCallback& afterEachRun = {});
   std::vector<StudyRow> runViscositySweep(const RowCallback& afterEachRun = {});
+  // Both, the size study's runs first, as one list of cases over the farm's ranks (every rank calls it).
+  // On rank 0: every row, in plan order, each to afterEachRun as it is scored; on a worker: nothing.
+  std::vector<StudyRow> runStudy(parallel::CaseFarm& farm, const RowCallback& afterEachRun = {});
 
   // One run, measured; its cement is handed back in `cement` when given.
   StudyRow run(const StudyRunSpec& spec, AnalysedCement* cement = nullptr) const;
+  // The two halves of run(): the injection (on any rank), then the cement's analysis and scores against
+  // the reference (rank 0). `rank` is recorded in the row.
+  SimulatedRun simulate(const StudyRunSpec& spec) const;
+  StudyRow score(const StudyRunSpec& spec, const SimulatedRun& simulated, int rank = 0,
+                 AnalysedCement* cement = nullptr) const;
 
   // The CT's cement analysis of any volume on (or resampled onto) the CT's grid.
   AnalysedCement analyse(const imaging::ImageType* volume) const;
@@ -57,6 +88,9 @@ public:
   const StudyPlan& plan() const { return plan_; }
 
 private:
+  std::vector<StudyRow> runCases(const std::vector<StudyRunSpec>& specs, parallel::CaseFarm* farm,
+                                 const RowCallback& afterEachRun);
+
   const imaging::ImageType* ct_;
   StudyPlan plan_;
   StudyOptions options_;
