@@ -175,7 +175,7 @@ TEST_F(MpiStudy, AFailingRankLosesOnlyItsOwnCases) {
   }
   EXPECT_GE(ok, 1u);  // rank 1 was handed the first run
   EXPECT_GE(failed, 1u);
-  EXPECT_NE(r.err.find("failed: rank 2 failed on purpose"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("failed: rank 2: failed on purpose"), std::string::npos) << r.err;
 }
 
 TEST(MpiPlan, ThreeRanksGiveTheSerialPlanOnTheVertebra) {

@@ -188,8 +188,8 @@ private:
       try {
         reply[8] = char(kOk);
         if (fail)
-          throw std::runtime_error("rank " + std::to_string(rank_) + " failed on purpose (CEMENTSPH_FAIL_RANK=" +
-                                   failRank + ", a test of failing ranks)");
+          throw std::runtime_error(std::string("failed on purpose (CEMENTSPH_FAIL_RANK=") + failRank +
+                                   ", a test of failing ranks)");
         reply += work(std::size_t(index));
       } catch (const std::invalid_argument& e) {
         reply.resize(9);
