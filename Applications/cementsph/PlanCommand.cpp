@@ -32,7 +32,7 @@ struct PlanArgs {
   double targetRadiusMm = 5, minDepthMm = 0, maxDepthMm = 20, minVolumeMl = 0.5, maxVolumeMl = 4;
   double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
   int maxEvaluations = 40, starts = 3, threads = 0;
-  bool quiet = false;
+  bool quiet = false, secondTip = false;
 };
 
 Eigen::Vector3d vec(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
@@ -56,6 +56,9 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
   sub.add_option("--starts", a->starts,
                  "Independent BOBYQA starts spread along the trajectory (under mpirun, one per free rank at a time)");
   sub.add_option("--threads", a->threads, "OpenMP threads (0: the cores the load average leaves free)");
+  sub.add_flag("--second-tip", a->secondTip,
+               "Also plan a second, shallower tip on the trajectory: the cannula withdrawn part-way through the "
+               "volume (the two-depth technique)");
   sub.add_flag("--quiet", a->quiet, "No line per evaluation");
   return [a]() {
     using namespace cementsph;
@@ -82,6 +85,7 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
       r.maxLeakageMl = a->maxLeakageMl;
       r.maxEvaluations = a->maxEvaluations;
       r.starts = a->starts;
+      r.secondTip = a->secondTip;
       image = imaging::readVolume(a->ct);
       r.validate(image); // before anything is written
     });
@@ -131,6 +135,10 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
       s.tipMm = plan.best.tipMm;
       s.direction = r.direction.normalized();
       s.volumeMl = plan.best.volumeMl;
+      if (plan.best.secondTip) {
+        s.secondTipWithdrawalMm = plan.best.depthMm - plan.best.secondDepthMm;
+        s.secondTipVolumeMl = plan.best.secondVolumeMl;
+      }
       scene::InjectionRunOptions o;
       o.outDir = (out / "best").string();
       const scene::InjectionRunResult run = scene::runInjection(image, s, o);
@@ -160,7 +168,11 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
     }
     const auto& b = plan.best;
     std::cout << "plan: depth " << b.depthMm << " mm (tip " << b.tipMm.x() << "," << b.tipMm.y() << "," << b.tipMm.z()
-              << " mm), " << b.volumeMl << " ml: coverage " << b.coverage << ", syringe " << b.syringeMpa
+              << " mm), " << b.volumeMl << " ml"
+              << (b.secondTip ? " (" + std::to_string(b.secondVolumeMl) + " ml of it at a second tip, depth " +
+                                    std::to_string(b.secondDepthMm) + " mm)"
+                              : std::string())
+              << ": coverage " << b.coverage << ", syringe " << b.syringeMpa
               << " MPa, leak " << b.leakageMl << " ml, " << (b.withinLimits ? "within" : "OUTSIDE") << " the limits; "
               << plan.evaluations.size() << " injections in " << plan.starts.size() << " starts"
               << (plan.mpiRanks > 1 ? " over " + std::to_string(plan.mpiRanks) + " MPI ranks" : std::string()) << ", "

@@ -245,3 +245,57 @@ TEST(ContinuumBone, AnObliqueCopyOfTheCTGivesTheSameCementInPatientCoordinates) 
   EXPECT_NEAR(b.volume, 800.0, 8.0);
   EXPECT_NEAR(a.volume, 800.0, 8.0);
 }
+
+// The two-depth technique (second_tip_withdrawal_mm, second_tip_volume_ml): 0.6 ml at the first tip, the
+// cannula withdrawn 14 mm along its axis, 0.4 ml at the second tip, in uniform bone. The two balls are
+// further apart than their radii add up to, so each holds its own volume: V_i = 4/3 pi phi R_i^3 (within 3 %
+// inside 1.25 R_i of its tip); the volume is kept, nothing enters the shaft behind the second tip, and the
+// stretch the cannula left is open to the cement.
+TEST(ContinuumBone, ASecondTipFillsItsOwnBall) {
+  const auto image = ct(80, [](int i, int j, int k) { return box(i, j, k, 0, 79) ? 1000.f : 150.f; });
+  nlohmann::json scene{{"tip_mm", {20, 20, 28}}, {"direction", {0, 0, 1}}, {"volume_ml", 1.0},
+                       {"second_tip_withdrawal_mm", 14.0}, {"second_tip_volume_ml", 0.4},
+                       {"snapshot_interval_s", 1000.0}};
+  const InjectionRunResult r = runInjection(image, sceneFromJson(scene), {});
+  const auto& m = r.metrics;
+  ASSERT_TRUE(m.contains("second_tip_mm"));
+  EXPECT_DOUBLE_EQ(m["second_tip_mm"][2].get<double>(), 14.0);
+  EXPECT_NEAR(m["second_tip_start_s"].get<double>(), 0.6 / 0.05, 1e-9);
+  EXPECT_NEAR(m["cement_volume_ml"].get<double>() / 1.0, 1.0, 0.01);
+  const double phi = porosity(150);
+  const Eigen::Vector3d tip1(20, 20, 28), tip2(20, 20, 14);
+  const double R1 = std::cbrt(3 * 600.0 / (4 * kPi * phi)), R2 = std::cbrt(3 * 400.0 / (4 * kPi * phi)); // mm
+  ASSERT_GT((tip1 - tip2).norm(), 1.25 * (R1 + R2));
+  auto* volume = r.particles->GetPointData()->GetArray("cement_volume_mm3");
+  double near1 = 0, near2 = 0, inShaft = 0;
+  for (vtkIdType i = 0; i < r.particles->GetNumberOfPoints(); ++i) {
+    const double* x = r.particles->GetPoint(i);
+    const Eigen::Vector3d p(x[0], x[1], x[2]);
+    const double v = volume->GetTuple1(i);
+    if ((p - tip1).norm() <= 1.25 * R1) near1 += v;
+    if ((p - tip2).norm() <= 1.25 * R2) near2 += v;
+    // The cannula's lumen behind the second outlet (more than half a voxel back) stays closed.
+    const double s = p.z() - tip2.z(), radial = std::hypot(p.x() - tip2.x(), p.y() - tip2.y());
+    if (s < -0.25 && radial <= 0.5 * 2.388) inShaft += v;
+  }
+  std::printf("two tips: %.1f mm^3 near the first (%.1f expected), %.1f near the second (%.1f expected)\n", near1, 600.0,
+              near2, 400.0);
+  EXPECT_NEAR(near1 / 600.0, 1.0, 0.03);
+  EXPECT_NEAR(near2 / 400.0, 1.0, 0.03);
+  EXPECT_EQ(inShaft, 0.0);
+
+  // The keys are checked: a second volume without a withdrawal, or all of the volume at the second tip.
+  for (const auto& [bad, key] : std::vector<std::pair<nlohmann::json, std::string>>{
+           {{{"second_tip_volume_ml", 0.4}}, "second_tip_volume_ml"},
+           {{{"second_tip_withdrawal_mm", 5.0}, {"second_tip_volume_ml", 1.0}}, "second_tip_volume_ml"},
+           {{{"second_tip_withdrawal_mm", -5.0}, {"second_tip_volume_ml", 0.4}}, "second_tip_withdrawal_mm"}}) {
+    nlohmann::json s{{"tip_mm", {20, 20, 28}}, {"volume_ml", 1.0}};
+    s.update(bad);
+    try {
+      (void)sceneFromJson(s);
+      ADD_FAILURE() << bad.dump() << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+}

@@ -99,3 +99,47 @@ TEST(Plan, ATrajectoryThatLeavesTheCtIsOneClearLine) {
   EXPECT_NE(r.err.find("leaves the CT"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
 }
+
+// --second-tip: four parameters (depth, volume, the second tip's place and share). The best plan holds the
+// limits and covers the target; its second tip lies on the trajectory, shallower than the first, with a
+// share of the volume inside the bounds [0.2, 0.8]; the best plan's own injection (best/) ran with it.
+TEST(Plan, ASecondTipOnTheTrajectoryHoldsTheLimits) {
+  const fs::path out = scratch("plan-second-tip");
+  const auto r = cementsph::testing::runProgram(
+      CEMENTSPH_EXECUTABLE,
+      {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
+       "--entry-mm", "41,49.08,22.5", "--direction", "-0.3,-0.954,0", "--min-depth-mm", "10", "--max-depth-mm", "30",
+       "--target-mm", "32,21,22.5", "--target-radius-mm", "6", "--min-volume-ml", "1", "--max-volume-ml", "4",
+       "--max-syringe-mpa", "3", "--max-leakage-ml", "0", "--second-tip", "--max-evaluations", "60", "--quiet",
+       "--out", out.string()});
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::ifstream in(out / "plan.json");
+  const auto plan = nlohmann::json::parse(in);
+  EXPECT_TRUE(plan.at("request").at("second_tip").get<bool>());
+  const auto& best = plan.at("best");
+  EXPECT_TRUE(best.at("within_limits").get<bool>());
+  EXPECT_DOUBLE_EQ(best.at("leakage_volume_ml").get<double>(), 0.0);
+  EXPECT_GT(best.at("coverage").get<double>(), 0.8);
+  const Eigen::Vector3d entry(41, 49.08, 22.5), axis = Eigen::Vector3d(-0.3, -0.954, 0).normalized();
+  std::size_t withSecondTip = 0;
+  for (const auto& e : plan.at("evaluations")) {
+    if (e.at("second_tip_mm").is_null()) continue;
+    ++withSecondTip;
+    const double d1 = e.at("depth_mm").get<double>(), d2 = e.at("second_tip_depth_mm").get<double>();
+    EXPECT_GE(d2, 10.0 - 1e-9);
+    EXPECT_LE(d2, d1 - 0.5 + 1e-9);
+    const Eigen::Vector3d tip2(e["second_tip_mm"][0].get<double>(), e["second_tip_mm"][1].get<double>(),
+                               e["second_tip_mm"][2].get<double>());
+    EXPECT_LT((tip2 - (entry + d2 * axis)).norm(), 1e-9);
+    const double share = e.at("second_tip_volume_ml").get<double>() / e.at("volume_ml").get<double>();
+    EXPECT_GE(share, 0.2 - 1e-12);
+    EXPECT_LE(share, 0.8 + 1e-12);
+  }
+  EXPECT_GT(withSecondTip, 0u);
+  if (!best.at("second_tip_mm").is_null()) {
+    std::ifstream m(out / "best" / "metrics.json");
+    const auto metrics = nlohmann::json::parse(m);
+    for (int a = 0; a < 3; ++a)
+      EXPECT_NEAR(metrics.at("second_tip_mm")[a].get<double>(), best["second_tip_mm"][a].get<double>(), 1e-9);
+  }
+}

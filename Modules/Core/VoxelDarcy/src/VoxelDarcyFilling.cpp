@@ -74,6 +74,23 @@ VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings setting
   barred_.assign(n, 0);
 }
 
+void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const std::vector<float>& porosity,
+                                   const std::vector<double>& permeability) {
+  if (porosity.size() != voxels.size() || permeability.size() != voxels.size())
+    throw std::invalid_argument("voxel Darcy: openVoxels needs one porosity and one permeability per voxel");
+  for (std::size_t i = 0; i < voxels.size(); ++i) {
+    const std::size_t c = voxels[i];
+    if (c >= medium_.count()) throw std::invalid_argument("voxel Darcy: openVoxels: a voxel outside the grid");
+    if (!(porosity[i] > 0 && porosity[i] <= 1) || !(permeability[i] > 0) || !std::isfinite(permeability[i]))
+      throw std::invalid_argument("voxel Darcy: openVoxels: porosity must be in (0, 1] and permeability > 0 at " +
+                                  mm(medium_.centre(c)));
+    if (state_[c] != kClosed) continue;
+    medium_.porosity[c] = porosity[i];
+    medium_.permeability[c] = permeability[i];
+    state_[c] = kEmpty;
+  }
+}
+
 void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) {
   std::array<int, 3> v{};
   for (int a = 0; a < 3; ++a) {
@@ -438,7 +455,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
     const double q = std::max(0.0, l.t * (pressure_[l.from] - frontPressure(l.to)));
     inflow.push_back({l.to, q});
   }
-  if (unknowns == 0)
+  // No outlet voxel filled yet (the start, or an outlet moved into fresh bone: VoxelDarcyInjection's second
+  // tip): the cement goes straight into the outlet's voxels. Filled voxels elsewhere then have no source and
+  // stand still (their pressure solves to the front's).
+  if (filledSourcePore == 0)
     for (std::size_t c : source_)
       if (state_[c] == kEmpty) inflow.push_back({c, flowRate * poreVolume(c) / openSourcePore});
   std::sort(inflow.begin(), inflow.end());

@@ -143,6 +143,9 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   if (continuum)
     throw std::invalid_argument("scene: bone_model \"continuum\" needs pressure_model \"voxel-darcy\" (got \"" +
                                 choice.pressureModel + "\")");
+  if (scene.hasSecondTip())
+    throw std::invalid_argument("scene: second_tip_withdrawal_mm needs pressure_model \"voxel-darcy\" (the particle "
+                                "models have one outlet; got \"" + choice.pressureModel + "\")");
   if (scene.viscosityLaw != "newtonian" || !scene.curingTable.empty())
     throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw + "\" and curing_table need pressure_model "
                                 "\"voxel-darcy\" (the particle models are Newtonian; got \"" + choice.pressureModel + "\")");

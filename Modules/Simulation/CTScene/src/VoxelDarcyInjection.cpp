@@ -220,12 +220,24 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   // than half a voxel behind the outlet plane, so that the voxel holding the tip stays open wherever the tip
   // falls within it.
   std::size_t shaftVoxels = 0;
+  // With a second tip, the stretch of the shaft between the two outlets opens when the cannula is withdrawn:
+  // those voxels, with their own porosity and permeability.
+  const double withdrawal = scene.hasSecondTip() ? *scene.secondTipWithdrawalMm * 1e-3 : 0.0;
+  std::vector<std::size_t> tractVoxels;
+  std::vector<float> tractPorosity;
+  std::vector<double> tractPermeability;
   if (scene.cannulaWall) {
     const double outer = 0.5 * innerDiameter + kCannulaWallM;
+    const double behind = 0.5 * solid.grid.spacing.maxCoeff();
     for (std::size_t c = 0; c < medium.count(); ++c) {
       const Eigen::Vector3d r = medium.centre(c) - tip;
       const double s = r.dot(axis);
-      if (s < -0.5 * solid.grid.spacing.maxCoeff() && s >= -cannulaLength && (r - s * axis).norm() <= outer && medium.porosity[c] > 0) {
+      if (s < -behind && s >= -cannulaLength && (r - s * axis).norm() <= outer && medium.porosity[c] > 0) {
+        if (withdrawal > 0 && s + withdrawal >= -behind) {
+          tractVoxels.push_back(c);
+          tractPorosity.push_back(medium.porosity[c]);
+          tractPermeability.push_back(medium.permeability[c]);
+        }
         medium.porosity[c] = 0.0f;
         ++shaftVoxels;
       }
@@ -284,6 +296,9 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   InjectionProgress progress(o, in.wallStart, T);
   double nextSnapshot = scene.snapshotIntervalS;
   bool stopped = false, stoppedAtLeak = false;
+  // The second tip's start (never, with one tip).
+  const double secondTipStart = scene.hasSecondTip() ? scene.secondTipStartS() : 2 * T;
+  bool atSecondTip = !scene.hasSecondTip();
   try {
     while (filling.time() < endTime) {
       const double factor = scene.curingFactor(filling.time());
@@ -297,7 +312,19 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
       // At most 1 % of the injection per step: progress every 1 % and a tip-pressure curve with 100 points.
       double dtMax = std::min(T - filling.time(), 0.01 * T);
       if (nextSnapshot - filling.time() > 1e-9 * T) dtMax = std::min(dtMax, nextSnapshot - filling.time());
+      if (!atSecondTip && secondTipStart - filling.time() > 1e-9 * T) dtMax = std::min(dtMax, secondTipStart - filling.time());
       filling.step(flowRate, dtMax);
+      if (!atSecondTip && filling.time() >= secondTipStart * (1 - 1e-12)) {
+        // The cannula is withdrawn: its tract opens, and the outlet is the second tip from now on.
+        filling.openVoxels(tractVoxels, tractPorosity, tractPermeability);
+        try {
+          filling.setSource(tip - withdrawal * axis, sourceRadius);
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument("scene: the second tip, second_tip_withdrawal_mm back along the axis: " +
+                                      std::string(e.what()));
+        }
+        atSecondTip = true;
+      }
       tipSeries.push_back({filling.time(), filling.sourcePressure(), cannulaDrop(factor, mu)});
       // A surgeon stops at the first leak (1 mm^3 of cement outside bone).
       if (scene.stopAtFirstLeak && !softTissue.empty() && leakage(filling, softTissue, nullptr) > 1e-9) {
@@ -358,6 +385,12 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
   metrics["volume_requested_ml"] = scene.volumeMl;
   metrics["simulated_time_s"] = filling.time();
   metrics["stopped_early"] = stopped;
+  if (scene.hasSecondTip()) {
+    const Eigen::Vector3d second = scene.secondTipMm();
+    metrics["second_tip_mm"] = {second.x(), second.y(), second.z()};
+    metrics["second_tip_start_s"] = secondTipStart;
+    metrics["second_tip_volume_ml"] = scene.secondTipVolumeMl;
+  }
   metrics["fluid_particles"] = cementVoxels; // the points of particles_NNNN.vtp: one per voxel holding cement
   metrics["cement_voxels"] = cementVoxels;
   metrics["fixed_particles"] = 0;

@@ -57,18 +57,34 @@ struct Context {
 double evaluate(unsigned, const double* x, double*, void* data) {
   auto* c = static_cast<Context*>(data);
   const PlanRequest& r = *c->request;
+  const Eigen::Vector3d axis = r.direction.normalized();
   PlanEvaluation e;
   e.index = int(c->evaluations->size());
   e.start = c->start;
   e.depthMm = x[0];
   e.volumeMl = x[1];
-  e.tipMm = r.entryMm + x[0] * r.direction.normalized();
+  e.tipMm = r.entryMm + x[0] * axis;
+  if (r.secondTip) {
+    e.secondDepthMm = r.minDepthMm + x[2] * (x[0] - r.minDepthMm);
+    // Less than half a millimetre back is the same outlet: one tip.
+    e.secondTip = x[0] - e.secondDepthMm >= 0.5;
+    if (e.secondTip) {
+      e.secondVolumeMl = x[3] * x[1];
+      e.secondTipMm = r.entryMm + e.secondDepthMm * axis;
+    } else {
+      e.secondDepthMm = 0;
+    }
+  }
   try {
     scene::SceneConfig s = r.scene;
     s.tipMm = e.tipMm;
-    s.direction = r.direction.normalized();
+    s.direction = axis;
     s.volumeMl = x[1];
     s.snapshotIntervalS = 1e9;
+    if (e.secondTip) {
+      s.secondTipWithdrawalMm = e.depthMm - e.secondDepthMm;
+      s.secondTipVolumeMl = e.secondVolumeMl;
+    }
     const scene::InjectionRunResult run = scene::runInjection(c->ct, s, {});
     e.coverage = targetCoverage(run.particles, r.targetCentreMm, r.targetRadiusMm);
     e.syringeMpa = run.metrics.value("max_injection_pressure_pa", 0.0) * 1e-6;
@@ -95,19 +111,22 @@ std::pair<double, double> startPoint(const PlanRequest& r, int s) {
 nlohmann::json runStart(const imaging::ImageType* ct, const PlanRequest& r, int start) {
   std::vector<PlanEvaluation> evaluations;
   Context context{ct, &r, start, &evaluations};
-  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 2);
-  const double lower[2] = {r.minDepthMm, r.minVolumeMl}, upper[2] = {r.maxDepthMm, r.maxVolumeMl};
+  const unsigned n = unsigned(r.parameters());
+  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, n);
+  // Depth and volume; with a second tip, its place t between the shallowest depth and the first tip, and
+  // its share s of the volume (InjectionPlanner.h).
+  const double lower[4] = {r.minDepthMm, r.minVolumeMl, 0.0, 0.2}, upper[4] = {r.maxDepthMm, r.maxVolumeMl, 0.9, 0.8};
   nlopt_set_lower_bounds(opt, lower);
   nlopt_set_upper_bounds(opt, upper);
   nlopt_set_max_objective(opt, evaluate, &context);
-  const double xtol[2] = {0.25, 0.05};
+  const double xtol[4] = {0.25, 0.05, 0.02, 0.02};
   nlopt_set_xtol_abs(opt, xtol);
   nlopt_set_maxeval(opt, r.maxEvaluations / r.starts);
-  const double step[2] = {std::max(0.5, 0.25 * (r.maxDepthMm - r.minDepthMm) / r.starts),
-                          std::max(0.05, 0.25 * (r.maxVolumeMl - r.minVolumeMl))};
+  const double step[4] = {std::max(0.5, 0.25 * (r.maxDepthMm - r.minDepthMm) / r.starts),
+                          std::max(0.05, 0.25 * (r.maxVolumeMl - r.minVolumeMl)), 0.2, 0.15};
   nlopt_set_initial_step(opt, step);
   const auto [depth, volume] = startPoint(r, start);
-  double x[2] = {depth, volume};
+  double x[4] = {depth, volume, 0.5, 0.5};
   double value = 0;
   const nlopt_result code = nlopt_optimize(opt, x, &value);
   nlopt_destroy(opt);
@@ -129,6 +148,13 @@ PlanEvaluation evaluationFromJson(const nlohmann::json& j) {
   e.leakageMl = j.at("leakage_volume_ml").get<double>();
   e.objective = j.at("objective").get<double>();
   e.withinLimits = j.at("within_limits").get<bool>();
+  e.secondTip = !j.at("second_tip_mm").is_null();
+  if (e.secondTip) {
+    e.secondDepthMm = j.at("second_tip_depth_mm").get<double>();
+    e.secondVolumeMl = j.at("second_tip_volume_ml").get<double>();
+    const auto& second = j.at("second_tip_mm");
+    e.secondTipMm = Eigen::Vector3d(second[0].get<double>(), second[1].get<double>(), second[2].get<double>());
+  }
   e.failure = j.at("failure").is_null() ? std::string() : j.at("failure").get<std::string>();
   return e;
 }
@@ -153,10 +179,12 @@ void PlanRequest::validate(const imaging::ImageType* ct) const {
   if (!(maxSyringeMpa > 0 && maxSyringeMpa < 100)) throw std::invalid_argument("--max-syringe-mpa must be in (0, 100) MPa");
   if (!(maxLeakageMl >= 0 && maxLeakageMl < 50)) throw std::invalid_argument("--max-leakage-ml must be in [0, 50) ml");
   if (starts < 1 || starts > 64) throw std::invalid_argument("--starts must be 1 .. 64");
-  if (maxEvaluations > 10000 || maxEvaluations / starts < 6)
+  const int perStart = 2 * parameters() + 2; // BOBYQA's 2n + 1 to begin with, and one more
+  if (maxEvaluations > 10000 || maxEvaluations / starts < perStart)
     throw std::invalid_argument("--max-evaluations must be at most 10000 and give each of the " +
-                                std::to_string(starts) + " starts at least 6 injections (BOBYQA's 5 to begin with, "
-                                "and one more): at least " + std::to_string(6 * starts));
+                                std::to_string(starts) + " starts at least " + std::to_string(perStart) +
+                                " injections (BOBYQA's first 2n + 1 and one more, n = " + std::to_string(parameters()) +
+                                "): at least " + std::to_string(perStart * starts));
 }
 
 double targetCoverage(vtkPolyData* points, const Eigen::Vector3d& centre, double radius) {
@@ -231,6 +259,10 @@ nlohmann::json PlanEvaluation::toJson() const {
           {"leakage_volume_ml", leakageMl},
           {"objective", objective},
           {"within_limits", withinLimits},
+          {"second_tip_depth_mm", secondTip ? nlohmann::json(secondDepthMm) : nlohmann::json(nullptr)},
+          {"second_tip_volume_ml", secondTip ? nlohmann::json(secondVolumeMl) : nlohmann::json(nullptr)},
+          {"second_tip_mm", secondTip ? nlohmann::json{secondTipMm.x(), secondTipMm.y(), secondTipMm.z()}
+                                      : nlohmann::json(nullptr)},
           {"failure", failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure)}};
 }
 
@@ -254,7 +286,8 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
             {"max_syringe_pressure_mpa", r.maxSyringeMpa},
             {"max_leakage_ml", r.maxLeakageMl},
             {"max_evaluations", r.maxEvaluations},
-            {"starts", r.starts}}},
+            {"starts", r.starts},
+            {"second_tip", r.secondTip}}},
           {"mpi_ranks", mpiRanks},
           {"frame", "the CT's patient frame, LPS mm"}};
 }
@@ -262,14 +295,17 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
 std::string PlanResult::csv() const {
   std::ostringstream s;
   s << "index,start,depth_mm,volume_ml,tip_x_mm,tip_y_mm,tip_z_mm,coverage,max_syringe_pressure_mpa,leakage_volume_ml,"
-       "objective,within_limits,failure\n"
+       "objective,within_limits,second_tip_depth_mm,second_tip_volume_ml,failure\n"
     << std::setprecision(10);
   for (const auto& e : evaluations) {
     std::string failure = e.failure;
     std::replace(failure.begin(), failure.end(), '"', '\'');
     s << e.index << ',' << e.start << ',' << e.depthMm << ',' << e.volumeMl << ',' << e.tipMm.x() << ',' << e.tipMm.y() << ','
       << e.tipMm.z() << ',' << e.coverage << ',' << e.syringeMpa << ',' << e.leakageMl << ',' << e.objective << ','
-      << (e.withinLimits ? 1 : 0) << ",\"" << failure << "\"\n";
+      << (e.withinLimits ? 1 : 0) << ',';
+    if (e.secondTip) s << e.secondDepthMm << ',' << e.secondVolumeMl;
+    else s << ',';
+    s << ",\"" << failure << "\"\n";
   }
   return s.str();
 }

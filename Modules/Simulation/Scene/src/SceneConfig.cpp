@@ -162,7 +162,9 @@ void applySceneJson(SceneConfig& s, const json& j) {
     else if (key == "stop_at_first_leak") {
       if (!v.is_boolean()) fail(key, "must be true or false");
       s.stopAtFirstLeak = v.get<bool>();
-    } else if (key == "cannula_gauge") {
+    } else if (key == "second_tip_withdrawal_mm") s.secondTipWithdrawalMm = number(v, key);
+    else if (key == "second_tip_volume_ml") s.secondTipVolumeMl = number(v, key);
+    else if (key == "cannula_gauge") {
       s.cannulaGauge = text(v, key);
       try {
         s.cannulaInnerDiameterMm = sph::cannulaInnerDiameterMm(*s.cannulaGauge);
@@ -238,6 +240,14 @@ void SceneConfig::validate() const {
   requireFraction(fixedFieldSpacingOverH, 1.0, "fixed_field_spacing_over_h");
   requireFraction(maxDisplacementOverH, 1.0, "max_displacement_over_h");
   requireFraction(neighbourSkinOverH, 2.0, "neighbour_skin_over_h");
+  if (secondTipWithdrawalMm) {
+    if (!(*secondTipWithdrawalMm > 0 && *secondTipWithdrawalMm < 1000))
+      fail("second_tip_withdrawal_mm", "must be > 0 and < 1000 mm");
+    if (!(secondTipVolumeMl > 0 && secondTipVolumeMl < volumeMl))
+      fail("second_tip_volume_ml", "must be > 0 and less than volume_ml (the first tip takes the rest)");
+  } else if (secondTipVolumeMl != 0) {
+    fail("second_tip_volume_ml", "needs second_tip_withdrawal_mm (how far back the second tip lies)");
+  }
 }
 
 sph::FixedSumMethod SceneConfig::fixedSumMethod() const {
@@ -351,6 +361,10 @@ json toJson(const SceneConfig& s) {
   j["soft_tissue_max_hu"] = s.bone.softTissueMaxHu;
   j["soft_tissue_permeability_m2"] = s.bone.softTissuePermeabilityM2;
   j["stop_at_first_leak"] = s.stopAtFirstLeak;
+  if (s.secondTipWithdrawalMm) {
+    j["second_tip_withdrawal_mm"] = *s.secondTipWithdrawalMm;
+    j["second_tip_volume_ml"] = s.secondTipVolumeMl;
+  }
   return j;
 }
 

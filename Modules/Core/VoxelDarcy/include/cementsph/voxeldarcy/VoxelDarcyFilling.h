@@ -95,6 +95,11 @@ public:
   // The cannula outlet: pore voxels whose centres lie within `radius` [m] of `centre` [m] (at least the voxel
   // containing the centre). Throws std::invalid_argument when the centre is outside or in an impermeable voxel.
   void setSource(const Eigen::Vector3d& centre, double radius);
+  // Opens impermeable voxels to the cement from now on, each with its porosity (0, 1] and permeability
+  // [m^2] (the tract a withdrawn cannula leaves). Voxels already open are left as they are. Throws
+  // std::invalid_argument for a voxel outside the grid or a value out of range.
+  void openVoxels(const std::vector<std::size_t>& voxels, const std::vector<float>& porosity,
+                  const std::vector<double>& permeability);
 
   // Viscosity [Pa s] of every voxel for the next steps (a Newtonian cement: one value). A law that varies
   // per voxel (shear-thinning) sets them with setVoxelViscosity.

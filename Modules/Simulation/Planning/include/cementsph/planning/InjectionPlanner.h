@@ -10,6 +10,11 @@
 // coverage the fraction of the target sphere's volume in voxels at least half filled with cement. A plan
 // whose injection cannot run (a tip in cortex, outside the CT) scores -1 and says why.
 //
+// A second tip (secondTip): the two-depth technique on one trajectory. The cement goes in at depth d, then
+// the cannula is withdrawn to d2 = d_min + t (d - d_min), t in [0, 0.9], and the last share s in
+// [0.2, 0.8] of V goes in there (scene keys second_tip_withdrawal_mm, second_tip_volume_ml): four
+// parameters (d, V, t, s) instead of two.
+//
 // Several starts (multi-start BOBYQA): start s of K begins at depth min + (s + 1/2)(max - min)/K and the
 // largest volume, with the evaluation budget shared equally; the best plan of all starts wins (the first
 // on a tie). A trajectory through bone with cortex, canal and soft tissue is a rugged landscape: one local
@@ -45,6 +50,8 @@ struct PlanRequest {
   double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
   int maxEvaluations = 40;                      // over all starts
   int starts = 3;                               // independent BOBYQA starts along the trajectory
+  bool secondTip = false;                       // also plan a second, shallower tip on the trajectory
+  int parameters() const { return secondTip ? 4 : 2; }
   // Throws std::invalid_argument (one line naming the option) for bounds out of order, a zero direction,
   // a target or trajectory that leaves the CT.
   void validate(const imaging::ImageType* ct) const;
@@ -55,6 +62,9 @@ struct PlanEvaluation {
   int start = 0;    // the start it belongs to
   double depthMm = 0, volumeMl = 0;
   Eigen::Vector3d tipMm = Eigen::Vector3d::Zero();
+  bool secondTip = false;                          // the plan has a second tip
+  double secondDepthMm = 0, secondVolumeMl = 0;    // where, and how much of volumeMl goes in there
+  Eigen::Vector3d secondTipMm = Eigen::Vector3d::Zero();
   double coverage = 0, syringeMpa = 0, leakageMl = 0, objective = -1;
   bool withinLimits = false;
   std::string failure; // why the injection could not run (empty when it ran)

@@ -52,6 +52,10 @@
 //   marrow_hu, bone_tissue_hu, kozeny_carman_diameter_mm, cortical_hu, soft_tissue_max_hu,
 //   soft_tissue_permeability_m2     the continuum's calibration              0, 1400, 0.3, 350, 40, 1e-7
 //   stop_at_first_leak (bool)       continuum: stop the injection when cement first reaches soft tissue false
+//   second_tip_withdrawal_mm, second_tip_volume_ml   voxel-darcy: a second tip on the same trajectory (the
+//                                   two-depth technique): once volume_ml - second_tip_volume_ml is in, the
+//                                   cannula is withdrawn this far along its axis (the tract it leaves opens to
+//                                   the cement) and the last second_tip_volume_ml goes in there   none
 //   capillary_tension_n_per_m       voxel-darcy: interfacial tension sigma of cement against the displaced
 //                                   fluid; > 0 gives each pore voxel a capillary entry pressure 2 sigma / r
 //                                   (r its distance to the solid; VALIDATION.md, the viscosity trend)     0 (off)
@@ -112,7 +116,12 @@ struct SceneConfig {
   std::string boneModel = "auto";
   BoneCalibration bone;
   bool stopAtFirstLeak = false;
+  std::optional<double> secondTipWithdrawalMm; // a second tip this far back along the axis; none: one tip
+  double secondTipVolumeMl = 0.0;              // of volume_ml, injected at the second tip
   double curingFactor(double timeSinceInjectionStartS) const;
+  bool hasSecondTip() const { return secondTipWithdrawalMm.has_value(); }
+  Eigen::Vector3d secondTipMm() const { return *tipMm - *secondTipWithdrawalMm * direction.normalized(); }
+  double secondTipStartS() const { return (volumeMl - secondTipVolumeMl) / flowRateMlPerS; }
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
