@@ -95,19 +95,22 @@ std::vector<std::string> studyArgs(const fs::path& out) {
           "--no-pictures", "--out", out.string()};
 }
 
+// The serial study each test compares with, in a folder of its own (ctest -j runs the tests side by side).
 class MpiStudy : public ::testing::Test {
 protected:
-  static void SetUpTestSuite() {
+  void SetUp() override {
     setenv("OMP_NUM_THREADS", "1", 1); // one thread per rank on the 2 shared cores
-    const fs::path out = scratch("mpi-study-serial");
+    const fs::path out =
+        scratch(std::string("mpi-study-serial-") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     const auto r = serial(studyArgs(out));
     ASSERT_EQ(r.exitCode, 0) << r.err;
     serialSize_ = readCsv(out / "study.csv");
     serialViscosity_ = readCsv(out / "spreading_vs_viscosity.csv");
+    ASSERT_EQ(serialSize_.size(), 4u);
+    ASSERT_EQ(serialViscosity_.size(), 2u);
   }
-  static std::vector<std::map<std::string, std::string>> serialSize_, serialViscosity_;
+  std::vector<std::map<std::string, std::string>> serialSize_, serialViscosity_;
 };
-std::vector<std::map<std::string, std::string>> MpiStudy::serialSize_, MpiStudy::serialViscosity_;
 
 void expectSameAsSerial(const std::vector<std::map<std::string, std::string>>& rows,
                         const std::vector<std::map<std::string, std::string>>& serialRows, int ranks) {
@@ -124,8 +127,6 @@ void expectSameAsSerial(const std::vector<std::map<std::string, std::string>>& r
 } // namespace
 
 TEST_F(MpiStudy, TwoAndThreeRanksGiveTheSerialRows) {
-  ASSERT_EQ(serialSize_.size(), 4u);
-  ASSERT_EQ(serialViscosity_.size(), 2u);
   for (int ranks : {2, 3}) {
     const fs::path out = scratch("mpi-study-" + std::to_string(ranks));
     const auto r = underMpirun(ranks, studyArgs(out));
