@@ -21,6 +21,10 @@ struct Command {
   std::string name;
   std::string summary;
   CommandSetup setup;
+  // Whether every rank of an MPI job takes part (study, plan: Modules/Parallel/CaseFarm). Any other
+  // command run under mpirun runs on rank 0 alone; the other ranks leave at once, so that N copies never
+  // write the same files.
+  bool spreadsOverRanks = false;
 };
 
 class CommandRegistry {
@@ -39,4 +43,11 @@ public:
   namespace {                                                                                      \
   [[maybe_unused]] const bool registered_##IDENT =                                                 \
       ::cementsph::app::CommandRegistry::add({NAME, SUMMARY, SETUP});                              \
+  }
+
+// The same for a command whose cases are spread over the ranks of an MPI job.
+#define CEMENTSPH_REGISTER_COMMAND_OVER_RANKS(IDENT, NAME, SUMMARY, SETUP)                         \
+  namespace {                                                                                      \
+  [[maybe_unused]] const bool registered_##IDENT =                                                 \
+      ::cementsph::app::CommandRegistry::add({NAME, SUMMARY, SETUP, true});                        \
   }

@@ -183,7 +183,7 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
 
 } // namespace
 
-CEMENTSPH_REGISTER_COMMAND(plan, "plan",
+CEMENTSPH_REGISTER_COMMAND_OVER_RANKS(plan, "plan",
                            "Plan an injection: the tip depth along a trajectory and the volume that cover a target "
                            "within syringe-pressure and leakage limits (NLopt BOBYQA over full injections)",
                            setupPlan)

@@ -291,7 +291,7 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
 
 } // namespace
 
-CEMENTSPH_REGISTER_COMMAND(study_command, "study",
+CEMENTSPH_REGISTER_COMMAND_OVER_RANKS(study_command, "study",
                            "Particle-size study (paper Fig. 6) as speed against error: radii x integrators, wall "
                            "time, particles, error against the finest run or a post-operative CT; viscosity sweep "
                            "(Fig. 8)",

@@ -147,8 +147,11 @@ int main(int argc, char** argv) {
   }
   cementsph::imaging::setLibraryMessagesVerbose(verbose);
 
+  std::map<CLI::App*, bool> overRanks;
+  for (const Command& command : commands) overRanks[app.get_subcommand(command.name)] = command.spreadsOverRanks;
   for (auto& [sub, run] : runners) {
     if (!sub->parsed()) continue;
+    if (quietRank && !overRanks[sub]) return 0; // rank 0 runs this command alone
     const std::string prefix = "cementsph " + sub->get_name() + ": error: ";
     try {
       return run();
