@@ -70,6 +70,7 @@ TEST(DemoCommand, VertebraReadsTheDicomSeriesAndReportsTheLeak) {
   EXPECT_TRUE(fs::exists(out / "inject" / "injection_pressure.png"));
   EXPECT_TRUE(fs::exists(out / "inject" / "cement_slices.png"));  // the leak in red (CementSlices test: colours)
   EXPECT_TRUE(fs::exists(out / "inject" / "cement_labels.nrrd"));
+  EXPECT_TRUE(fs::exists(out / "inject" / "cement_surface.png")); // the leak red (CementSurface test: where)
 }
 
 namespace {
