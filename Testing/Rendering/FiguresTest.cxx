@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <vtkDoubleArray.h>
+#include <vtkFlyingEdges3D.h>
 #include <vtkImageData.h>
 #include <vtkPNGReader.h>
 #include <vtkPointData.h>
@@ -411,4 +412,53 @@ TEST(CementSurface, TheLeakIsRedWhereItProjectsAndThereIsNoRedWithoutALeak) {
   EXPECT_THROW(writeCementSurface(empty, dir / "empty.png", o), std::invalid_argument);
   EXPECT_FALSE(std::filesystem::exists(dir / "empty.png"));
   EXPECT_THROW(writeCementSurface(nullptr, dir / "null.png", o), std::invalid_argument);
+}
+
+TEST(SurfaceComparison, WithTheLabelMapTheLeakedPartOfTheSimulatedSurfaceIsRed) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  // The 0.5 isosurface of all cement (labels 1 and 2) of the CementSurface test's map, as both surfaces.
+  auto labels = cementLabels(true);
+  auto mask = vtkSmartPointer<vtkImageData>::New();
+  mask->CopyStructure(labels);
+  mask->AllocateScalars(VTK_FLOAT, 1);
+  for (vtkIdType i = 0; i < labels->GetNumberOfPoints(); ++i)
+    mask->GetPointData()->GetScalars()->SetTuple1(i, labels->GetPointData()->GetScalars()->GetTuple1(i) > 0 ? 1.0 : 0.0);
+  vtkNew<vtkFlyingEdges3D> edges;
+  edges->SetInputData(mask);
+  edges->SetValue(0, 0.5);
+  edges->Update();
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  surface->DeepCopy(edges->GetOutput());
+  vtkNew<vtkDoubleArray> zero;
+  zero->SetName("DistanceToOtherSurface_mm");
+  zero->SetNumberOfTuples(surface->GetNumberOfPoints());
+  zero->Fill(0.0);
+  surface->GetPointData()->AddArray(zero);
+  SurfaceComparisonOptions o; // 1500 x 560, three panels of 500
+  o.viewDirection[0] = 0;
+  o.viewDirection[1] = -1; // from -y: +x to the right, +z up
+  o.viewDirection[2] = 0;
+  o.maxDistanceMm = 1.0;
+  o.simulationLabels = labels;
+  renderSurfaceComparison(surface, surface, dir / "labelled.png", o);
+  const Pixels with = classify(dir / "labelled.png");
+  // The middle panel (x 500..999) below its title: red only right of the cement's centre (x = 13.5 mm: the
+  // leak is at x 19.5..24.5, the block at 2.5..12.5) and above it (z 11.5..15.5 against the centre z = 10),
+  // and some red there; the left panel (the experiment) has none.
+  std::size_t redMiddle = 0;
+  for (const auto& [x, y] : with.red) {
+    if (y > 0.85 * 560) continue; // the titles
+    EXPECT_FALSE(x < 500) << "red in the experiment's panel at " << x << ", " << y;
+    if (x >= 500 && x < 1000) {
+      ++redMiddle;
+      EXPECT_GT(x, 750) << y;
+      EXPECT_GT(y, 280) << x;
+    }
+  }
+  EXPECT_GT(redMiddle, 200u);
+  // Without the label map: no red in the middle panel.
+  o.simulationLabels = nullptr;
+  renderSurfaceComparison(surface, surface, dir / "plain.png", o);
+  for (const auto& [x, y] : classify(dir / "plain.png").red) EXPECT_FALSE(x >= 500 && x < 1000) << x << ", " << y;
 }
