@@ -324,9 +324,11 @@ sph::CuringCurve SceneConfig::curing() const {
   if (!muCured) fail("cured_viscosity_pa_s", "is missing: curing_model \"exponential\" needs it (or a bundled cement)");
   if (!(curingReferenceTimeS >= 0)) fail("curing_reference_time_s", "must be >= 0 s (time since mixing)");
   if (!(*tCure > curingReferenceTimeS)) fail("curing_time_s", "must come after curing_reference_time_s (both since mixing)");
-  if (!(*muCured > referenceViscosityPaS()))
-    fail("cured_viscosity_pa_s", "must exceed the law's viscosity at curing_reference_time_s (" +
-                                     std::to_string(referenceViscosityPaS()) + " Pa s)");
+  if (!(*muCured > referenceViscosityPaS())) {
+    std::ostringstream what;
+    what << "must exceed the law's viscosity at curing_reference_time_s (" << referenceViscosityPaS() << " Pa s)";
+    fail("cured_viscosity_pa_s", what.str());
+  }
   return sph::CuringCurve::exponential(curingReferenceTimeS, referenceViscosityPaS(), *tCure, *muCured);
 }
 
