@@ -389,7 +389,7 @@ json toJson(const SceneConfig& s) {
   if (s.curingModel) j["curing_model"] = *s.curingModel;
   if (s.curingTimeS) j["curing_time_s"] = *s.curingTimeS;
   if (s.curedViscosityPaS) j["cured_viscosity_pa_s"] = *s.curedViscosityPaS;
-  j["curing_reference_time_s"] = s.curingReferenceTimeS;
+  if (s.curingReferenceTimeS != 0.0) j["curing_reference_time_s"] = s.curingReferenceTimeS; // 0: the default
   if (s.cannulaGauge) j["cannula_gauge"] = *s.cannulaGauge;
   j["bone_model"] = s.boneModel;
   j["marrow_hu"] = s.bone.marrowHu;
