@@ -89,7 +89,8 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
       ->required();
   sub.add_option("--post", a->post, "Post-injection CT (file or DICOM directory)")->required();
   sub.add_option("--simulated", a->simulated,
-                 "Simulated post-injection CT (voxelised particles, HU) on the pre CT's grid");
+                 "Simulated post-injection CT (voxelised particles, HU) on the pre CT's grid; a cement_labels.nrrd "
+                 "beside it (inject, continuum bone) draws leaked cement red in surfaces.png");
   sub.add_option("--injection-point-mm", a->injection,
                  "Injection point (cannula tip) in the pre CT's physical space, mm: x,y,z")
       ->required()
@@ -285,7 +286,13 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
       });
       if (surfaces) {
         picture("surfaces.png", [&](const fs::path& png) {
-          cementsph::rendering::renderSurfaceComparison(ct.surface, sim->surface, png);
+          // `inject`'s label map beside the simulated CT (continuum bone): leaked cement red.
+          cementsph::rendering::SurfaceComparisonOptions options;
+          const fs::path labelsFile = fs::path(a->simulated).parent_path() / "cement_labels.nrrd";
+          const auto labelsItk = fs::exists(labelsFile) ? readVolume(labelsFile.string()) : nullptr;
+          const auto labels = labelsItk ? toVtk(labelsItk.GetPointer()) : nullptr;
+          options.simulationLabels = labels;
+          cementsph::rendering::renderSurfaceComparison(ct.surface, sim->surface, png, options);
         });
       }
     }

@@ -3,13 +3,15 @@
 // scene's volume is in. Writes DIR/metrics.json, tip_pressure.csv, particles_NNNN.vtp + particles.pvd,
 // simulated_ct.nrrd and scene.json (Modules/Simulation/CTScene/.../InjectionRunner.h; docs/scene-figures.md),
 // then the pictures that fit an injection: tip_pressure.png (paper Fig. 10), injection_pressure.png (syringe,
-// cannula and outlet pressures over time) and, when the scene key
+// cannula and outlet pressures over time), with a label map (continuum bone) cement_slices.png and
+// cement_surface.png (leaked cement red), and, when the scene key
 // simulated_ct_snapshots is on, the X-ray sequence of the snapshots in DIR/xray (`cementsph xray`, Fig. 12).
 // A failed picture is one line on stderr and exit status 3 (the numbers are written), as in `compare`.
 #include "CommandRegistry.h"
 #include "SceneOverrides.h"
 
 #include "cementsph/rendering/CementSlices.h"
+#include "cementsph/rendering/CementSurface.h"
 #include "cementsph/rendering/TipPressurePlot.h"
 
 #include "cementsph/imaging/ItkVtkBridge.h"
@@ -24,10 +26,13 @@
 #include <omp.h>
 
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <functional>
+#include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 namespace {
 
@@ -52,7 +57,7 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   sub.add_flag("--allow-large", a->allowLarge,
                "Run even when the estimated work is hours (or memory over half the RAM); docs: README 'Bad input'");
   sub.add_flag("--no-pictures", a->noPictures,
-               "Do not write tip_pressure.png (Fig. 10), injection_pressure.png nor, with simulated_ct_snapshots, the X-ray sequence "
+               "Do not write tip_pressure.png (Fig. 10), injection_pressure.png, cement_slices.png, cement_surface.png nor, with simulated_ct_snapshots, the X-ray sequence "
                "in DIR/xray (Fig. 12)");
   return [a, &sub]() {
     // Flags given on the command line override the scene file (and --set), in this order.
@@ -111,6 +116,37 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
                                                 cementsph::imaging::toVtk(labels.GetPointer()), centre,
                                                 out / "cement_slices.png");
         std::cout << "wrote " << (out / "cement_slices.png").string() << "\n";
+      });
+    if (std::filesystem::exists(out / "cement_labels.nrrd"))
+      picture("cement_surface.png", [&] {
+        // The cement's surface: in bone blue, leaked red (CementSurface.h).
+        const auto labels = cementsph::imaging::readVolume((out / "cement_labels.nrrd").string());
+        cementsph::rendering::CementSurfaceOptions options;
+        // Seen from the side of the largest leak (from the tip towards it, a little from above), so the
+        // cement in bone does not hide it.
+        double largest = 0;
+        if (m.contains("leakage_sites"))
+          for (const auto& site : m["leakage_sites"])
+            if (site["volume_ml"].get<double>() > largest) {
+              largest = site["volume_ml"].get<double>();
+              double d[3], norm = 0;
+              for (int axis = 0; axis < 3; ++axis) {
+                d[axis] = site["position_mm"][axis].get<double>() - (*scene.tipMm)[axis];
+                norm += d[axis] * d[axis];
+              }
+              norm = std::sqrt(norm);
+              if (norm > 1e-6)
+                for (int axis = 0; axis < 3; ++axis) options.viewDirection[axis] = d[axis] / norm + (axis == 2 ? 0.35 : 0.0);
+            }
+        if (m.contains("leakage_volume_ml") && m["leakage_volume_ml"].get<double>() > 0) {
+          std::ostringstream leakNote;
+          leakNote << std::setprecision(3) << "leaked " << m["leakage_volume_ml"].get<double>() << " ml at " << m["leakage_sites"].size()
+               << (m["leakage_sites"].size() == 1 ? " site" : " sites");
+          options.note = leakNote.str();
+        }
+        cementsph::rendering::writeCementSurface(cementsph::imaging::toVtk(labels.GetPointer()),
+                                                 out / "cement_surface.png", options);
+        std::cout << "wrote " << (out / "cement_surface.png").string() << "\n";
       });
     picture("injection_pressure.png", [&] {
       cementsph::rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", out / "injection_pressure.png");

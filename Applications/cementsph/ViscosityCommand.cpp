@@ -46,7 +46,7 @@ int runViscosity(const ViscosityOptions& o) {
                    {"cannula_length_mm", o.lengthMm},
                    {"flow_rate_ml_per_s", o.flowRateMlPerS},
                    {"bore_speed_mm_per_s", cementsph::sph::boreSpeed(Q, D) * 1e3}};
-  if (!o.gauge.empty()) j["cannula_gauge"] = o.gauge;
+  if (!o.gauge.empty()) j["cannula_gauge"] = cementsph::sph::canonicalCannulaGauge(o.gauge);
   double dropPa = o.pressureDropMPa * 1e6;
   if (powerLaw) {
     j["flow_index"] = o.flowIndex;
@@ -82,7 +82,8 @@ cementsph::app::CommandRunner setupViscosity(CLI::App& sub) {
   sub.add_option("--consistency-pa-s-n", o->consistencyPaSn, "power-law consistency K [Pa.s^n] (prints the drop)");
   sub.add_option("--flow-index", o->flowIndex, "power-law flow index n (with --consistency-pa-s-n or --pressure-drop-mpa)");
   sub.add_option("--cannula-gauge", o->gauge,
-                 "cannula gauge instead of the inner diameter: " + cementsph::sph::knownCannulaGauges());
+                 "cannula gauge instead of the inner diameter (nominal, TubeFlow.h): " +
+                     cementsph::sph::knownCannulaGauges() + "; thin wall also as 10GTW");
   sub.add_flag("--json", o->json, "print one JSON object (pressure_drop_pa, ...)");
   return [o] { return runViscosity(*o); };
 }

@@ -70,6 +70,7 @@ TEST(DemoCommand, VertebraReadsTheDicomSeriesAndReportsTheLeak) {
   EXPECT_TRUE(fs::exists(out / "inject" / "injection_pressure.png"));
   EXPECT_TRUE(fs::exists(out / "inject" / "cement_slices.png"));  // the leak in red (CementSlices test: colours)
   EXPECT_TRUE(fs::exists(out / "inject" / "cement_labels.nrrd"));
+  EXPECT_TRUE(fs::exists(out / "inject" / "cement_surface.png")); // the leak red (CementSurface test: where)
 }
 
 namespace {
@@ -154,4 +155,11 @@ TEST(ViscosityCommand, PowerLawDropAsJsonAndConsistencyBack) {
   ASSERT_EQ(back.first, 0);
   EXPECT_NEAR(back.second.at("consistency_pa_s_n").get<double>(), 250.0, 1e-3);
   EXPECT_NE(run("--consistency-pa-s-n 250").first, 0); // no flow index: a clear error
+  // A thin wall by name: 10GTW is 10G-thin, the midpoint of Component Supply's 0.112-0.116 in (TubeFlow.h).
+  const auto thin = run("--viscosity-pa-s 100 --cannula-gauge 10GTW");
+  ASSERT_EQ(thin.first, 0);
+  EXPECT_EQ(thin.second.at("cannula_gauge"), "10G-thin");
+  EXPECT_NEAR(thin.second.at("cannula_inner_diameter_mm").get<double>(), 0.114 * 25.4, 1e-9);
+  EXPECT_NE(run("--viscosity-pa-s 100 --cannula-gauge 11G-thin").first, 0); // no sourced thin-wall 11G
+  EXPECT_NE(run("--viscosity-pa-s 100 --cannula-gauge 9G").first, 0);       // unknown
 }

@@ -3,6 +3,7 @@
 #include "RenderingTestSupport.h"
 
 #include "cementsph/rendering/CementSlices.h"
+#include "cementsph/rendering/CementSurface.h"
 #include "cementsph/rendering/ImageCompare.h"
 #include "cementsph/rendering/SliceComparison.h"
 #include "cementsph/rendering/SurfaceComparison.h"
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <vtkDoubleArray.h>
+#include <vtkFlyingEdges3D.h>
 #include <vtkImageData.h>
 #include <vtkPNGReader.h>
 #include <vtkPointData.h>
@@ -18,10 +20,12 @@
 #include <vtkSmartPointer.h>
 #include <vtkSphereSource.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <vector>
 
 using namespace cementsph::rendering;
 using cementsph::rendering::test::expectMatchesBaseline;
@@ -307,4 +311,154 @@ TEST(CementSlices, GreyIsTheBoneWindowBlueIsCementRedIsLeak) {
   EXPECT_EQ(blue[0], int(std::lround(0.5 * grey + 0.5 * 40)));
   EXPECT_THROW(writeCementSlices(ct, labels, {50, 10, 10}, dir / "outside.png"), std::invalid_argument);
   EXPECT_FALSE(std::filesystem::exists(dir / "outside.png"));
+}
+
+// --- The cement surface from a label map (issue 10: leaks red on the surface picture). ---
+
+namespace {
+
+// 30 x 20 x 20 voxels of 1 mm at the origin: cement in bone (1) in i 3..12, j 5..14, k 5..14; a leak (2) in
+// i 20..24, j 8..11, k 12..15, apart from it (nothing hides it from the camera at -y).
+vtkSmartPointer<vtkImageData> cementLabels(bool withLeak) {
+  auto labels = vtkSmartPointer<vtkImageData>::New();
+  labels->SetDimensions(30, 20, 20);
+  labels->SetSpacing(1, 1, 1);
+  labels->SetOrigin(0, 0, 0);
+  labels->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 30; ++i) {
+        const bool bone = i >= 3 && i <= 12 && j >= 5 && j <= 14 && k >= 5 && k <= 14;
+        const bool leak = withLeak && i >= 20 && i <= 24 && j >= 8 && j <= 11 && k >= 12 && k <= 15;
+        labels->SetScalarComponentFromDouble(i, j, k, 0, bone ? 1 : leak ? 2 : 0);
+      }
+  return labels;
+}
+
+struct Pixels {
+  std::vector<std::array<int, 2>> red, blue;
+};
+
+Pixels classify(const std::filesystem::path& png) {
+  auto reader = vtkSmartPointer<vtkPNGReader>::New();
+  reader->SetFileName(png.string().c_str());
+  reader->Update();
+  vtkImageData* image = reader->GetOutput();
+  int dims[3];
+  image->GetDimensions(dims);
+  Pixels p;
+  for (int y = 0; y < dims[1]; ++y)
+    for (int x = 0; x < dims[0]; ++x) {
+      const double r = image->GetScalarComponentAsDouble(x, y, 0, 0), g = image->GetScalarComponentAsDouble(x, y, 0, 1),
+                   b = image->GetScalarComponentAsDouble(x, y, 0, 2);
+      if (r > 120 && r > 2 * g && r > 2 * b) p.red.push_back({x, y});
+      if (b > 120 && b > 1.3 * r && b > 1.3 * g) p.blue.push_back({x, y});
+    }
+  return p;
+}
+
+} // namespace
+
+TEST(CementSurface, TheLeakIsRedWhereItProjectsAndThereIsNoRedWithoutALeak) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  CementSurfaceOptions o; // 800 x 720, title band 12 %
+  o.viewDirection[0] = 0;
+  o.viewDirection[1] = -1; // camera at -y: screen right is +x, screen up +z (view up)
+  o.viewDirection[2] = 0;
+  writeCementSurface(cementLabels(true), dir / "leak.png", o);
+  const Pixels leak = classify(dir / "leak.png");
+  // The documented view (CementSurface.h), worked out by hand: the surfaces lie half a voxel outside the
+  // voxel centres, so the union box is x 2.5..24.5, y 4.5..14.5, z 4.5..15.5 mm: centre (13.5, 9.5, 10),
+  // diagonal sqrt(22^2 + 10^2 + 11^2); parallel scale 0.55 diagonal over half the 3D area's height.
+  const double height3d = 720 * (1 - 0.12), scale = 0.55 * std::sqrt(22.0 * 22 + 10 * 10 + 11 * 11);
+  const double pxPerMm = 0.5 * height3d / scale;
+  auto px = [&](double xMm) { return 400 + (xMm - 13.5) * pxPerMm; };
+  auto py = [&](double zMm) { return 0.5 * height3d + (zMm - 10.0) * pxPerMm; };
+  // The leak's face towards the camera: x 19.5..24.5, z 11.5..15.5 mm. Every red pixel lies in it (3 px
+  // for the rasteriser and the surface's chamfered edges) and red fills most of it.
+  const double slack = 3;
+  std::vector<std::array<int, 2>> redSurface;
+  std::size_t redLegend = 0; // "red: leaked" in the title band
+  for (const auto& p : leak.red) {
+    if (p[1] < height3d) redSurface.push_back(p);
+    else ++redLegend;
+  }
+  EXPECT_GT(redLegend, 0u);
+  ASSERT_FALSE(redSurface.empty()) << "no red: the leak is not drawn";
+  for (const auto& [x, y] : redSurface) {
+    ASSERT_GE(x, px(19.5) - slack) << x << ", " << y;
+    ASSERT_LE(x, px(24.5) + slack) << x << ", " << y;
+    ASSERT_GE(y, py(11.5) - slack) << x << ", " << y;
+    ASSERT_LE(y, py(15.5) + slack) << x << ", " << y;
+  }
+  const double faceArea = (px(24.5) - px(19.5)) * (py(15.5) - py(11.5));
+  EXPECT_GT(double(redSurface.size()), 0.6 * faceArea); // the flat face, less its chamfered rim
+  EXPECT_LT(double(redSurface.size()), 1.1 * faceArea);
+  // The cement in bone is blue, in its own projection (x 2.5..12.5, z 4.5..14.5), besides the legend's text.
+  std::size_t blueInBone = 0;
+  for (const auto& [x, y] : leak.blue)
+    if (x >= px(2.5) - slack && x <= px(12.5) + slack && y >= py(4.5) - slack && y <= py(14.5) + slack) ++blueInBone;
+  EXPECT_GT(double(blueInBone), 0.6 * (px(12.5) - px(2.5)) * (py(14.5) - py(4.5)));
+
+  // Without a leak: no red pixel anywhere (surface or legend).
+  writeCementSurface(cementLabels(false), dir / "none.png", o);
+  const Pixels none = classify(dir / "none.png");
+  EXPECT_TRUE(none.red.empty()) << none.red.size() << " red pixels without a leak";
+  EXPECT_FALSE(none.blue.empty());
+  // No cement at all, or a null map: one clear error, no file.
+  auto empty = cementLabels(false);
+  for (vtkIdType i = 0; i < empty->GetNumberOfPoints(); ++i) empty->GetPointData()->GetScalars()->SetTuple1(i, 0);
+  EXPECT_THROW(writeCementSurface(empty, dir / "empty.png", o), std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(dir / "empty.png"));
+  EXPECT_THROW(writeCementSurface(nullptr, dir / "null.png", o), std::invalid_argument);
+}
+
+TEST(SurfaceComparison, WithTheLabelMapTheLeakedPartOfTheSimulatedSurfaceIsRed) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  // The 0.5 isosurface of all cement (labels 1 and 2) of the CementSurface test's map, as both surfaces.
+  auto labels = cementLabels(true);
+  auto mask = vtkSmartPointer<vtkImageData>::New();
+  mask->CopyStructure(labels);
+  mask->AllocateScalars(VTK_FLOAT, 1);
+  for (vtkIdType i = 0; i < labels->GetNumberOfPoints(); ++i)
+    mask->GetPointData()->GetScalars()->SetTuple1(i, labels->GetPointData()->GetScalars()->GetTuple1(i) > 0 ? 1.0 : 0.0);
+  vtkNew<vtkFlyingEdges3D> edges;
+  edges->SetInputData(mask);
+  edges->SetValue(0, 0.5);
+  edges->Update();
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  surface->DeepCopy(edges->GetOutput());
+  vtkNew<vtkDoubleArray> zero;
+  zero->SetName("DistanceToOtherSurface_mm");
+  zero->SetNumberOfTuples(surface->GetNumberOfPoints());
+  zero->Fill(0.0);
+  surface->GetPointData()->AddArray(zero);
+  SurfaceComparisonOptions o; // 1500 x 560, three panels of 500
+  o.viewDirection[0] = 0;
+  o.viewDirection[1] = -1; // from -y: +x to the right, +z up
+  o.viewDirection[2] = 0;
+  o.maxDistanceMm = 1.0;
+  o.simulationLabels = labels;
+  renderSurfaceComparison(surface, surface, dir / "labelled.png", o);
+  const Pixels with = classify(dir / "labelled.png");
+  // The middle panel (x 500..999) below its title: red only right of the cement's centre (x = 13.5 mm: the
+  // leak is at x 19.5..24.5, the block at 2.5..12.5) and above it (z 11.5..15.5 against the centre z = 10),
+  // and some red there; the left panel (the experiment) has none.
+  std::size_t redMiddle = 0;
+  for (const auto& [x, y] : with.red) {
+    if (y > 0.85 * 560) continue; // the titles
+    EXPECT_FALSE(x < 500) << "red in the experiment's panel at " << x << ", " << y;
+    if (x >= 500 && x < 1000) {
+      ++redMiddle;
+      EXPECT_GT(x, 750) << y;
+      EXPECT_GT(y, 280) << x;
+    }
+  }
+  EXPECT_GT(redMiddle, 200u);
+  // Without the label map: no red in the middle panel.
+  o.simulationLabels = nullptr;
+  renderSurfaceComparison(surface, surface, dir / "plain.png", o);
+  for (const auto& [x, y] : classify(dir / "plain.png").red) EXPECT_FALSE(x >= 500 && x < 1000) << x << ", " << y;
 }

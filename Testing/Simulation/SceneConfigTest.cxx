@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -169,6 +170,12 @@ TEST(SceneConfig, TheModelAndRheologyKeysAreReadAndCheckedNamingTheKey) {
   EXPECT_DOUBLE_EQ(s.curingFactor(0.0), 3.0);           // 300 s after mixing: halfway from 1 to 5
   EXPECT_DOUBLE_EQ(s.curingFactor(1000.0), 5.0);        // held past the table
   EXPECT_EQ(sceneFromJson(toJson(s)).cannulaInnerDiameterMm, 1.803); // round trip
+  json thin = minimal();
+  thin["cannula_gauge"] = "10GTW"; // thin wall: ID 0.112-0.116 in (Component Supply; TubeFlow.h), the midpoint
+  const SceneConfig t = sceneFromJson(thin);
+  EXPECT_NEAR(t.cannulaInnerDiameterMm, 0.114 * 25.4, 1e-12);
+  EXPECT_EQ(*t.cannulaGauge, "10G-thin"); // canonical
+  EXPECT_EQ(sceneFromJson(toJson(t)).cannulaInnerDiameterMm, t.cannulaInnerDiameterMm);
   for (const auto& [key, bad] : std::vector<std::pair<std::string, json>>{
            {"viscosity_law", "bingham"},
            {"pore_permeability_m2", 1e300},
@@ -177,9 +184,64 @@ TEST(SceneConfig, TheModelAndRheologyKeysAreReadAndCheckedNamingTheKey) {
            {"curing_table", json{{0.0, -1.0}}},
            {"mixing_to_injection_s", -5.0},
            {"cannula_gauge", "99G"},
+           {"cannula_gauge", "11G-thin"}, // no sourced thin-wall 11G
            {"pressure_model", "magic"}}) {
     json k = minimal();
     k[key] = bad;
     expectError(k, key);
   }
+}
+
+TEST(SceneConfig, ABundledCementCuresExponentiallyFromTheLawsViscosityAndBadCuringKeysAreOneError) {
+  // CMW 1 at 25 C (Nicholas et al. 2007): 75e3 Pa s at 8.7 min after mixing. The power law's K = 200 Pa s^n
+  // holds at 120 s after mixing; the injection starts 240 s after mixing.
+  json j = minimal();
+  j["viscosity_law"] = "power-law";
+  j["consistency_pa_s_n"] = 200.0;
+  j["flow_index"] = 0.5;
+  j["cement"] = "cmw1-25c";
+  j["curing_reference_time_s"] = 120.0;
+  j["mixing_to_injection_s"] = 240.0;
+  const SceneConfig s = sceneFromJson(j);
+  EXPECT_EQ(s.curing().kind(), "exponential");
+  EXPECT_DOUBLE_EQ(s.referenceViscosityPaS(), 200.0); // the factor multiplies K
+  const double tau = (522.0 - 120.0) / std::log(75e3 / 200.0);
+  EXPECT_NEAR(s.curingFactor(0.0), std::exp(120.0 / tau), 1e-12 * std::exp(120.0 / tau));
+  EXPECT_NEAR(s.curingFactor(60.0), std::exp(180.0 / tau), 1e-12 * std::exp(180.0 / tau));
+  EXPECT_NEAR(200.0 * s.curingFactor(522.0 - 240.0), 75e3, 1e-9 * 75e3); // the source's cured viscosity
+  EXPECT_DOUBLE_EQ(s.curingFactor(1000.0), 75e3 / 200.0);              // held
+  const SceneConfig back = sceneFromJson(toJson(s));                  // round trip
+  EXPECT_DOUBLE_EQ(back.curingFactor(60.0), s.curingFactor(60.0));
+  // Explicit points win over the cement's; a Newtonian cement's reference is viscosity_pa_s.
+  json e = minimal();
+  e["curing_model"] = "exponential";
+  e["curing_time_s"] = 600.0;
+  e["cured_viscosity_pa_s"] = 1e4;
+  e["viscosity_pa_s"] = 100.0;
+  const SceneConfig x = sceneFromJson(e);
+  EXPECT_NEAR(x.curingFactor(600.0), 100.0, 1e-9);
+  EXPECT_NEAR(x.curingFactor(300.0), 10.0, 1e-9); // halfway: sqrt(100)
+  for (const auto& [key, bad] : std::vector<std::pair<std::string, json>>{
+           {"cement", "simplex-p"},
+           {"curing_model", "magic"},
+           {"curing_time_s", -1.0},           // before the reference time (0)
+           {"cured_viscosity_pa_s", 50.0},     // below the law's 100 Pa s
+           {"curing_reference_time_s", -3.0}}) {
+    json k = e;
+    k[key] = bad;
+    expectError(k, key);
+  }
+  json noTime = minimal();
+  noTime["curing_model"] = "exponential";
+  noTime["cured_viscosity_pa_s"] = 1e4;
+  expectError(noTime, "curing_time_s");
+  json twoRises = e;
+  twoRises["viscosity_rate_pa_per_s"] = 1.0;
+  expectError(twoRises, "viscosity_rate_pa_per_s");
+  json tableToo = e;
+  tableToo["curing_table"] = json{{0.0, 1.0}, {10.0, 2.0}};
+  expectError(tableToo, "curing_table");
+  json tableNone = minimal();
+  tableNone["curing_model"] = "table";
+  expectError(tableNone, "curing_model");
 }

@@ -15,6 +15,7 @@
 #include <itkImageRegionConstIteratorWithIndex.h>
 #include <vtkPointData.h>
 
+#include <cmath>
 #include <filesystem>
 
 using namespace cementsph;
@@ -118,4 +119,29 @@ TEST(VoxelDarcyInjection, APowerLawOfIndexOneIsTheNewtonianRunAndTheKeysAreCheck
   pl["flow_index"] = 0.5;
   pl["cannula_gauge"] = "99G";
   EXPECT_THROW(sceneFromJson(pl), std::invalid_argument);
+}
+
+TEST(VoxelDarcyInjection, ACuringCementMultipliesThePowerLawsConsistency) {
+  // CMW 1 at 25 C (75e3 Pa s at 522 s after mixing, Nicholas et al. 2007), K = 100 Pa s^n at 120 s after
+  // mixing, injected from 240 s after mixing: 0.1 ml at 0.05 ml/s, T = 2 s. The cannula's drop is the power
+  // law's closed form with K times the curing factor, 2 f K L / R ((3n+1)/n Q/(pi R^3))^n, written out here.
+  const nlohmann::json scene{{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.1}, {"snapshot_interval_s", 10.0},
+                             {"cannula_length_mm", 5}, {"viscosity_law", "power-law"}, {"consistency_pa_s_n", 100.0},
+                             {"flow_index", 0.5}, {"cement", "cmw1-25c"}, {"curing_reference_time_s", 120.0},
+                             {"mixing_to_injection_s", 240.0}};
+  const InjectionRunResult r = runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(scene), {});
+  const double tau = (522.0 - 120.0) / std::log(75e3 / 100.0), T = 2.0;
+  const double fEnd = std::exp((240.0 + T - 120.0) / tau);
+  EXPECT_EQ(r.metrics["curing_model"], "exponential");
+  EXPECT_NEAR(r.metrics["curing_factor_at_end"].get<double>(), fEnd, 1e-9 * fEnd);
+  EXPECT_NEAR(r.metrics["curing_factor_at_start"].get<double>(), std::exp(120.0 / tau), 1e-9);
+  const double K = 100, n = 0.5, L = 5e-3, Q = 0.05e-6, R = 0.5 * 2.388e-3, pi = 3.14159265358979323846;
+  const double drop = 2 * fEnd * K * L / R * std::pow((3 * n + 1) / n * Q / (pi * R * R * R), n);
+  // The last step (at most 1 % of T) takes the factor at its start: exp(-0.01 T / tau) below fEnd at worst.
+  EXPECT_NEAR(r.metrics["cannula_pressure_drop_pa"].get<double>() / drop, 1.0, 0.01 * T / tau + 1e-9);
+  // The particle models are Newtonian without curing: one clear error.
+  nlohmann::json eos = scene;
+  eos["viscosity_law"] = "newtonian";
+  eos["pressure_model"] = "equation-of-state";
+  EXPECT_THROW(runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(eos), {}), std::invalid_argument);
 }

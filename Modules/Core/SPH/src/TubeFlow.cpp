@@ -1,5 +1,6 @@
 #include "cementsph/sph/TubeFlow.h"
 
+#include <cctype>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -10,14 +11,59 @@ namespace cementsph::sph {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-// Nominal inner diameters [mm], regular wall (needle gauge chart, after ISO 9626 / Birmingham gauge:
-// 8G OD 4.191 ID 3.429, 10G 3.404 / 2.692, 11G 3.048 / 2.388, 12G 2.769 / 2.159, 13G 2.413 / 1.803);
-// thin wall 10G ID 0.112-0.116 in (2.896 mm nominal, hypodermic tubing suppliers). Other thin walls are not
-// tabulated here: give cannula_inner_diameter_mm.
-const std::vector<std::pair<std::string, double>>& gauges() {
-  static const std::vector<std::pair<std::string, double>> table{
-      {"8G", 3.429}, {"10G", 2.692}, {"10G-thin", 2.896}, {"11G", 2.388}, {"12G", 2.159}, {"13G", 1.803}};
+constexpr double kMmPerInch = 25.4;
+
+// The gauge table of TubeFlow.h: nominal inner diameters [mm], the chart's own mm figures for regular walls,
+// the supplier's inch ranges' midpoints converted for 10G thin and extra-thin.
+struct Cannula {
+  int gauge;
+  const char* wall; // "" regular, "thin", "extra-thin"
+  double innerDiameterMm;
+};
+const std::vector<Cannula>& cannulas() {
+  static const std::vector<Cannula> table{{8, "", 3.429},
+                                          {10, "", 2.692},
+                                          {10, "thin", 0.114 * kMmPerInch},
+                                          {10, "extra-thin", 0.11825 * kMmPerInch},
+                                          {11, "", 2.388},
+                                          {12, "", 2.159},
+                                          {13, "", 1.803}};
   return table;
+}
+
+std::string nameOf(int gauge, const std::string& wall) {
+  return std::to_string(gauge) + "G" + (wall.empty() ? "" : "-" + wall);
+}
+
+// Parses an accepted name into (gauge, wall); throws listing the valid names.
+std::pair<int, std::string> parseGauge(const std::string& name) {
+  std::string s;
+  for (char c : name)
+    if (!std::isspace(static_cast<unsigned char>(c))) s += char(std::toupper(static_cast<unsigned char>(c)));
+  const auto unknown = [&]() {
+    return std::invalid_argument("unknown cannula gauge '" + name + "' (valid: " + knownCannulaGauges() +
+                                 "; thin wall also as 10GTW, extra-thin as 10GXTW; or give the inner diameter in mm)");
+  };
+  std::size_t digits = 0;
+  while (digits < s.size() && std::isdigit(static_cast<unsigned char>(s[digits]))) ++digits;
+  if (digits == 0 || digits > 2 || digits >= s.size() || s[digits] != 'G') throw unknown();
+  const int gauge = std::stoi(s.substr(0, digits));
+  std::string suffix = s.substr(digits + 1);
+  if (!suffix.empty() && (suffix[0] == '-' || suffix[0] == '_')) suffix.erase(0, 1);
+  std::string wall;
+  if (suffix.empty() || suffix == "RW" || suffix == "REGULAR") wall = "";
+  else if (suffix == "TW" || suffix == "THIN") wall = "thin";
+  else if (suffix == "XTW" || suffix == "EXTRA-THIN" || suffix == "EXTRATHIN") wall = "extra-thin";
+  else throw unknown();
+  bool gaugeKnown = false;
+  for (const Cannula& c : cannulas()) {
+    if (c.gauge == gauge && c.wall == wall) return {gauge, wall};
+    gaugeKnown = gaugeKnown || c.gauge == gauge;
+  }
+  if (!gaugeKnown) throw unknown();
+  throw std::invalid_argument("cannula gauge '" + name + "': no sourced " + wall + "-wall inner diameter for " +
+                              std::to_string(gauge) + "G (tabulated: " + knownCannulaGauges() +
+                              "); give the inner diameter in mm instead");
 }
 
 void requirePositive(double x, const char* what) {
@@ -84,15 +130,20 @@ double tubePressureDrop(const Rheology& law, double L, double Q, double D) {
 }
 
 double cannulaInnerDiameterMm(const std::string& gauge) {
-  for (const auto& [name, id] : gauges())
-    if (name == gauge) return id;
-  throw std::invalid_argument("unknown cannula gauge '" + gauge + "' (known: " + knownCannulaGauges() +
-                              "; or give the inner diameter in mm)");
+  const auto [number, wall] = parseGauge(gauge);
+  for (const Cannula& c : cannulas())
+    if (c.gauge == number && c.wall == wall) return c.innerDiameterMm;
+  throw std::logic_error("cannula table"); // parseGauge found it
+}
+
+std::string canonicalCannulaGauge(const std::string& gauge) {
+  const auto [number, wall] = parseGauge(gauge);
+  return nameOf(number, wall);
 }
 
 std::string knownCannulaGauges() {
   std::string s;
-  for (const auto& [name, id] : gauges()) s += (s.empty() ? "" : ", ") + name;
+  for (const Cannula& c : cannulas()) s += (s.empty() ? "" : ", ") + nameOf(c.gauge, c.wall);
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include <vtkActor.h>
 #include <vtkCamera.h>
 #include <vtkDataArray.h>
+#include <vtkImageData.h>
 #include <vtkLookupTable.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
@@ -18,6 +19,7 @@
 #include <vtkSmartPointer.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
 #include <cmath>
@@ -60,6 +62,58 @@ vtkSmartPointer<vtkActor> plainActor(vtkPolyData* surface, double r, double g, d
   return actor;
 }
 
+// The label (1 in bone, 2 leaked) of the cement voxel nearest to p among the 3 x 3 x 3 around it (index
+// distance); 1 where none is labelled.
+int labelNear(vtkImageData* labels, const double p[3]) {
+  double ijk[3];
+  labels->TransformPhysicalPointToContinuousIndex(p, ijk);
+  int extent[6];
+  labels->GetExtent(extent);
+  int best = 1;
+  double bestDistance = 1e300;
+  for (int dk = -1; dk <= 1; ++dk)
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        const int i = int(std::lround(ijk[0])) + di, j = int(std::lround(ijk[1])) + dj, k = int(std::lround(ijk[2])) + dk;
+        if (i < extent[0] || i > extent[1] || j < extent[2] || j > extent[3] || k < extent[4] || k > extent[5]) continue;
+        const int label = int(std::lround(labels->GetScalarComponentAsDouble(i, j, k, 0)));
+        if (label != 1 && label != 2) continue;
+        const double d = (i - ijk[0]) * (i - ijk[0]) + (j - ijk[1]) * (j - ijk[1]) + (k - ijk[2]) * (k - ijk[2]);
+        if (d < bestDistance) {
+          bestDistance = d;
+          best = label;
+        }
+      }
+  return best;
+}
+
+// The simulated surface coloured per vertex by the label map: blue in bone, red leaked.
+vtkSmartPointer<vtkActor> labelledActor(vtkPolyData* surface, vtkImageData* labels) {
+  auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colours->SetName("cement_label_colour");
+  colours->SetNumberOfComponents(3);
+  colours->SetNumberOfTuples(surface->GetNumberOfPoints());
+  for (vtkIdType v = 0; v < surface->GetNumberOfPoints(); ++v) {
+    double p[3];
+    surface->GetPoint(v, p);
+    const bool leaked = labelNear(labels, p) == 2;
+    const unsigned char rgb[3] = {static_cast<unsigned char>(leaked ? 230 : 140), static_cast<unsigned char>(leaked ? 20 : 179),
+                                  static_cast<unsigned char>(leaked ? 20 : 230)};
+    colours->SetTypedTuple(v, rgb);
+  }
+  auto coloured = vtkSmartPointer<vtkPolyData>::New();
+  coloured->ShallowCopy(surface); // the caller's surface keeps its arrays
+  coloured->GetPointData()->SetScalars(colours);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(coloured);
+  mapper->SetScalarModeToUsePointData();
+  mapper->SetColorModeToDirectScalars();
+  mapper->ScalarVisibilityOn();
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  return actor;
+}
+
 } // namespace
 
 void renderSurfaceComparison(vtkPolyData* experiment, vtkPolyData* simulation, const std::filesystem::path& png,
@@ -85,9 +139,14 @@ void renderSurfaceComparison(vtkPolyData* experiment, vtkPolyData* simulation, c
   auto middle = panel(1.0 / 3.0, 2.0 / 3.0);
   auto right = panel(2.0 / 3.0, 1.0);
   left->AddActor(plainActor(experiment, 0.85, 0.75, 0.45)); // bone-cement beige
-  middle->AddActor(plainActor(simulation, 0.55, 0.70, 0.90));
+  if (options.simulationLabels != nullptr) {
+    middle->AddActor(labelledActor(simulation, options.simulationLabels));
+    addTitle(middle, "simulation: blue in bone, red leaked");
+  } else {
+    middle->AddActor(plainActor(simulation, 0.55, 0.70, 0.90));
+    addTitle(middle, "simulation");
+  }
   addTitle(left, "experiment (CT)");
-  addTitle(middle, "simulation");
   addTitle(right, "simulation: distance to CT surface");
 
   // Sequential table (white-yellow-red, like the paper's 0 -> large error colouring): distance is >= 0,

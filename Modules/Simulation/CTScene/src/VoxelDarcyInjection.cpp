@@ -424,6 +424,8 @@ InjectionRunResult runVoxelDarcyInjection(const imaging::ImageType* ct, const Sc
     metrics["apparent_viscosity_min_pa_s"] = std::isfinite(lo) ? lo : 0.0;
     metrics["apparent_viscosity_max_pa_s"] = hi;
     metrics["curing_factor_at_end"] = scene.curingFactor(filling.time());
+    metrics["curing_factor_at_start"] = scene.curingFactor(0.0);
+    metrics["curing_model"] = scene.curing().kind();
   }
   metrics["dimensionless_numbers"] = in.choice.numbersJson();
   metrics["pressure_is_physical"] = true;

@@ -149,7 +149,21 @@ void applySceneJson(SceneConfig& s, const json& j) {
         if (!row.is_array() || row.size() != 2) fail(key, "must be a non-empty array of [t_since_mixing_s, factor] pairs");
         s.curingTable.emplace_back(number(row[0], key), number(row[1], key));
       }
-    } else if (key == "bone_model") {
+    } else if (key == "cement") {
+      s.cement = text(v, key);
+      try {
+        (void)sph::bundledCement(*s.cement);
+      } catch (const std::invalid_argument& e) {
+        fail(key, e.what());
+      }
+    } else if (key == "curing_model") {
+      s.curingModel = text(v, key);
+      if (*s.curingModel != "none" && *s.curingModel != "table" && *s.curingModel != "exponential")
+        fail(key, "must be \"none\", \"table\" or \"exponential\" (got \"" + *s.curingModel + "\")");
+    } else if (key == "curing_time_s") s.curingTimeS = number(v, key);
+    else if (key == "cured_viscosity_pa_s") s.curedViscosityPaS = number(v, key);
+    else if (key == "curing_reference_time_s") s.curingReferenceTimeS = number(v, key);
+    else if (key == "bone_model") {
       s.boneModel = text(v, key);
       if (s.boneModel != "auto" && s.boneModel != "pore-resolved" && s.boneModel != "continuum")
         fail(key, "must be \"auto\", \"pore-resolved\" or \"continuum\" (got \"" + s.boneModel + "\")");
@@ -165,9 +179,10 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "second_tip_withdrawal_mm") s.secondTipWithdrawalMm = number(v, key);
     else if (key == "second_tip_volume_ml") s.secondTipVolumeMl = number(v, key);
     else if (key == "cannula_gauge") {
-      s.cannulaGauge = text(v, key);
+      const std::string name = text(v, key);
       try {
-        s.cannulaInnerDiameterMm = sph::cannulaInnerDiameterMm(*s.cannulaGauge);
+        s.cannulaInnerDiameterMm = sph::cannulaInnerDiameterMm(name);
+        s.cannulaGauge = sph::canonicalCannulaGauge(name);
       } catch (const std::invalid_argument& e) {
         fail(key, e.what());
       }
@@ -226,10 +241,7 @@ void SceneConfig::validate() const {
   }
   if (const char* problem = bone.problem()) fail("bone_model", problem);
   if (!(mixingToInjectionS >= 0) || !std::isfinite(mixingToInjectionS)) fail("mixing_to_injection_s", "must be >= 0 s");
-  for (std::size_t k = 0; k < curingTable.size(); ++k) {
-    if (!(curingTable[k].second > 0) || !std::isfinite(curingTable[k].second)) fail("curing_table", "factors must be > 0");
-    if (k > 0 && !(curingTable[k].first > curingTable[k - 1].first)) fail("curing_table", "times must increase strictly");
-  }
+  (void)curing(); // the curing keys, each error naming its key
   if (!(capillaryTensionNPerM >= 0) || !std::isfinite(capillaryTensionNPerM) || capillaryTensionNPerM > 1.0)
     fail("capillary_tension_n_per_m", "must be in [0, 1] N/m (0: no capillary entry)");
   if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
@@ -288,18 +300,49 @@ SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string
   }
 }
 
-double SceneConfig::curingFactor(double t) const {
-  if (curingTable.empty()) return 1.0;
-  const double since = mixingToInjectionS + t;
-  if (since <= curingTable.front().first) return curingTable.front().second;
-  for (std::size_t k = 1; k < curingTable.size(); ++k)
-    if (since <= curingTable[k].first) {
-      const auto& [t0, f0] = curingTable[k - 1];
-      const auto& [t1, f1] = curingTable[k];
-      return f0 + (f1 - f0) * (since - t0) / (t1 - t0);
-    }
-  return curingTable.back().second;
+double SceneConfig::referenceViscosityPaS() const {
+  if (viscosityLaw == "power-law") return rheology.consistencyPaSn;
+  if (viscosityLaw == "carreau") return rheology.zeroShearViscosityPaS;
+  return viscosityPaS;
 }
+
+sph::CuringCurve SceneConfig::curing() const {
+  const std::string kind = curingModel ? *curingModel : cement ? "exponential" : !curingTable.empty() ? "table" : "none";
+  if (kind == "none") {
+    if (!curingTable.empty()) fail("curing_table", "is not used with curing_model \"none\": remove one of them");
+    return sph::CuringCurve::none();
+  }
+  if (kind == "table") {
+    if (curingTable.empty()) fail("curing_model", "\"table\" needs curing_table [[t_since_mixing_s, factor], ...]");
+    try {
+      return sph::CuringCurve::table(curingTable);
+    } catch (const std::invalid_argument& e) {
+      fail("curing_table", std::string(e.what()).substr(std::string("curing table: ").size()));
+    }
+  }
+  if (!curingTable.empty())
+    fail("curing_table", "is not used with curing_model \"exponential\" (or a cement): remove one of them");
+  if (viscosityRatePaPerS || !viscosityTable.empty())
+    fail(viscosityRatePaPerS ? "viscosity_rate_pa_per_s" : "viscosity_table",
+         "is a second viscosity rise besides the curing curve (curing_model \"exponential\" or cement): remove one");
+  std::optional<sph::BundledCement> bundled;
+  if (cement) bundled = sph::bundledCement(*cement);
+  const std::optional<double> tCure = curingTimeS ? curingTimeS : bundled ? std::optional<double>(bundled->curingTimeS) : std::nullopt;
+  const std::optional<double> muCured =
+      curedViscosityPaS ? curedViscosityPaS : bundled ? std::optional<double>(bundled->curedViscosityPaS) : std::nullopt;
+  if (!tCure) fail("curing_time_s", "is missing: curing_model \"exponential\" needs it (or a bundled cement)");
+  if (!muCured) fail("cured_viscosity_pa_s", "is missing: curing_model \"exponential\" needs it (or a bundled cement)");
+  if (!(curingReferenceTimeS >= 0)) fail("curing_reference_time_s", "must be >= 0 s (time since mixing)");
+  if (!(*tCure > curingReferenceTimeS)) fail("curing_time_s", "must come after curing_reference_time_s (both since mixing)");
+  if (!(*muCured > referenceViscosityPaS())) {
+    std::ostringstream what;
+    what << "must exceed the law's viscosity at curing_reference_time_s (" << referenceViscosityPaS() << " Pa s)";
+    fail("cured_viscosity_pa_s", what.str());
+  }
+  return sph::CuringCurve::exponential(curingReferenceTimeS, referenceViscosityPaS(), *tCure, *muCured);
+}
+
+double SceneConfig::curingFactor(double t) const { return curing().factor(mixingToInjectionS + t); }
 
 json toJson(const SceneConfig& s) {
   json j;
@@ -352,6 +395,11 @@ json toJson(const SceneConfig& s) {
     j["curing_table"] = json::array();
     for (const auto& [t, f] : s.curingTable) j["curing_table"].push_back({t, f});
   }
+  if (s.cement) j["cement"] = *s.cement;
+  if (s.curingModel) j["curing_model"] = *s.curingModel;
+  if (s.curingTimeS) j["curing_time_s"] = *s.curingTimeS;
+  if (s.curedViscosityPaS) j["cured_viscosity_pa_s"] = *s.curedViscosityPaS;
+  if (s.curingReferenceTimeS != 0.0) j["curing_reference_time_s"] = s.curingReferenceTimeS; // 0: the default
   if (s.cannulaGauge) j["cannula_gauge"] = *s.cannulaGauge;
   j["bone_model"] = s.boneModel;
   j["marrow_hu"] = s.bone.marrowHu;

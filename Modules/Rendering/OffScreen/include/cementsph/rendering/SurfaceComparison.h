@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+class vtkImageData;
 class vtkPolyData;
 
 namespace cementsph::rendering {
@@ -20,6 +21,10 @@ struct SurfaceComparisonOptions {
   // Upper end of the colour scale, mm; empty: the array's maximum. Fixing it makes pictures of
   // different runs comparable.
   std::optional<double> maxDistanceMm;
+  // The simulation's label map (cement_labels.nrrd of `inject`: 1 cement in bone, 2 leaked), not owned; when
+  // given, the middle panel draws each vertex of the simulated surface in the colour of the nearest cement
+  // voxel within one voxel (blue in bone, red leaked; blue where none is that near) and its title says so.
+  vtkImageData* simulationLabels = nullptr;
   // Camera direction (from the focal point towards the camera) and view-up, patient axes.
   double viewDirection[3] = {0.55, -1.0, 0.45};
   double viewUp[3] = {0.0, 0.0, 1.0};

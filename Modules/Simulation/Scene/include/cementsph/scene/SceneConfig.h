@@ -44,7 +44,18 @@
 //   mixing_to_injection_s           time from mixing to the start of injection                 0
 //   curing_table [[t_s, factor]]    viscosity factor over time since mixing (piecewise linear; held outside
 //                                   the table), multiplying any law                            none (1)
-//   cannula_gauge "8G".."13G"       sets cannula_inner_diameter_mm from the gauge table (TubeFlow.h)
+//   cement "<name>"                 a bundled cement's curing (sph/Viscosity/Curing.h: cmw1-25c, palacos-r-25c,
+//                                   cemex-isoplastic-25c and their -37c; Nicholas et al. 2007): sets the
+//                                   exponential curve's curing_time_s and cured_viscosity_pa_s (keys given
+//                                   explicitly win)                                             none
+//   curing_model "none"|"table"|"exponential"   the curing curve (Curing.h); exponential: mu(t) = mu_ref
+//                                   exp((t - t_ref)/tau) through the law's viscosity (viscosity_pa_s, K or
+//                                   mu0) at curing_reference_time_s and cured_viscosity_pa_s at curing_time_s
+//                                   (both since mixing), held after it       exponential with cement, table
+//                                                                            with curing_table, else none
+//   curing_time_s, cured_viscosity_pa_s, curing_reference_time_s   the exponential's points   -, -, 0
+//   cannula_gauge "11G"|"11G-thin"|...  sets cannula_inner_diameter_mm from the gauge table (TubeFlow.h: 8G,
+//                                   10G, 10G-thin (or 10GTW), 10G-extra-thin (10GXTW), 11G, 12G, 13G; nominal)
 //   bone_model "auto"|"pore-resolved"|"continuum"   pore-resolved: the paper's solid voxels; continuum: each
 //                                   voxel's porosity and permeability from its HU (BoneCalibration.h); auto:
 //                                   continuum when the tip's voxel is above threshold_hu (no pore resolved
@@ -65,6 +76,7 @@
 
 #include "cementsph/scene/BoneCalibration.h"
 #include "cementsph/sph/ModelParameters.h"
+#include "cementsph/sph/Viscosity/Curing.h"
 #include "cementsph/sph/Viscosity/Rheology.h"
 #include "cementsph/sph/ViscositySchedule.h"
 
@@ -111,6 +123,10 @@ struct SceneConfig {
   sph::RheologyParameters rheology;
   double mixingToInjectionS = 0.0;
   std::vector<std::pair<double, double>> curingTable; // (time since mixing [s], viscosity factor); empty: 1
+  std::optional<std::string> cement;                  // a bundled cement (sph::bundledCement)
+  std::optional<std::string> curingModel;             // "none", "table", "exponential"; empty: inferred
+  std::optional<double> curingTimeS, curedViscosityPaS; // the exponential's cured point (since mixing)
+  double curingReferenceTimeS = 0.0;                  // since mixing, where the law's viscosity holds
   std::optional<std::string> cannulaGauge;
   // Bone (BoneCalibration.h): pore-resolved (the paper: HU > threshold_hu is solid) or a continuum from HU.
   std::string boneModel = "auto";
@@ -119,9 +135,17 @@ struct SceneConfig {
   std::optional<double> secondTipWithdrawalMm; // a second tip this far back along the axis; none: one tip
   double secondTipVolumeMl = 0.0;              // of volume_ml, injected at the second tip
   double curingFactor(double timeSinceInjectionStartS) const;
+<<<<<<< HEAD
   bool hasSecondTip() const { return secondTipWithdrawalMm.has_value(); }
   Eigen::Vector3d secondTipMm() const { return *tipMm - *secondTipWithdrawalMm * direction.normalized(); }
   double secondTipStartS() const { return (volumeMl - secondTipVolumeMl) / flowRateMlPerS; }
+=======
+  // The curing curve over time since mixing (throws std::invalid_argument as validate() for bad keys).
+  sph::CuringCurve curing() const;
+  // The law's viscosity the curing factor multiplies [Pa s]: viscosity_pa_s, consistency_pa_s_n (the power
+  // law's viscosity at 1/s) or zero_shear_viscosity_pa_s.
+  double referenceViscosityPaS() const;
+>>>>>>> wip-rheo
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
