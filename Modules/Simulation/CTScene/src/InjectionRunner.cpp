@@ -143,16 +143,11 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   if (continuum)
     throw std::invalid_argument("scene: bone_model \"continuum\" needs pressure_model \"voxel-darcy\" (got \"" +
                                 choice.pressureModel + "\")");
-<<<<<<< HEAD
   if (scene.hasSecondTip())
     throw std::invalid_argument("scene: second_tip_withdrawal_mm needs pressure_model \"voxel-darcy\" (the particle "
                                 "models have one outlet; got \"" + choice.pressureModel + "\")");
-  if (scene.viscosityLaw != "newtonian" || !scene.curingTable.empty())
-    throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw + "\" and curing_table need pressure_model "
-=======
   if (scene.viscosityLaw != "newtonian" || scene.curing().kind() != "none")
     throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw + "\" and curing (curing_table, curing_model, cement) need pressure_model "
->>>>>>> wip-rheo
                                 "\"voxel-darcy\" (the particle models are Newtonian; got \"" + choice.pressureModel + "\")");
   m.pressureModel = choice.pressureModel;
   const bool incompressible = m.pressureModel == "incompressible";

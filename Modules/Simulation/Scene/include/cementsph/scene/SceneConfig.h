@@ -135,17 +135,14 @@ struct SceneConfig {
   std::optional<double> secondTipWithdrawalMm; // a second tip this far back along the axis; none: one tip
   double secondTipVolumeMl = 0.0;              // of volume_ml, injected at the second tip
   double curingFactor(double timeSinceInjectionStartS) const;
-<<<<<<< HEAD
   bool hasSecondTip() const { return secondTipWithdrawalMm.has_value(); }
   Eigen::Vector3d secondTipMm() const { return *tipMm - *secondTipWithdrawalMm * direction.normalized(); }
   double secondTipStartS() const { return (volumeMl - secondTipVolumeMl) / flowRateMlPerS; }
-=======
   // The curing curve over time since mixing (throws std::invalid_argument as validate() for bad keys).
   sph::CuringCurve curing() const;
   // The law's viscosity the curing factor multiplies [Pa s]: viscosity_pa_s, consistency_pa_s_n (the power
   // law's viscosity at 1/s) or zero_shear_viscosity_pa_s.
   double referenceViscosityPaS() const;
->>>>>>> wip-rheo
 
   double spacingM() const { return 2.0 * particleRadiusMm * 1e-3; }
   double flowRateM3PerS() const { return flowRateMlPerS * 1e-6; }
