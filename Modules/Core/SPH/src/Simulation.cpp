@@ -371,23 +371,43 @@ void Simulation::sumDensity() {
     field_.prepare(fluid_.x.data(), fluid_.y.data(), fluid_.z.data(), n);
     fixedGradX_.resize(n); fixedGradY_.resize(n); fixedGradZ_.resize(n);
   }
+  // The summation order is the one the engine had before it was restructured (so the presets' runs are
+  // unchanged to the last bit): the fixed particles' share is summed on its own (or sampled from the
+  // table) and added after the fluid pairs, except for a relisted particle, whose fixed share comes first.
   struct Eq2 {
+    using RelistedFixedFirst = std::true_type;
     Simulation& s;
     const double* M; const float* FM; double* RHO; double w0;
-    double begin(std::size_t i) { return M[i] * w0; }
-    void fluid(std::size_t, std::size_t j, const Pair& p, double& rho) { rho += M[j] * s.densityKernel_.value(p.r()); }
-    void mirror(std::size_t j, std::size_t i, const Pair& p) { RHO[j] += M[i] * s.densityKernel_.value(p.r()); }
-    void fixed(std::size_t, std::uint32_t k, const Pair& p, double& rho) {
-      rho += static_cast<double>(FM[k]) * s.densityKernel_.value(p.r());
+    struct Acc {
+      double rho, fixed;
+      bool fixedFirst, added;
+    };
+    double sampleTable(std::size_t i) { // the fixed particles' share, and grad Phi for the force pass
+      double d, g[3];
+      s.field_.sample(s.fluid_.x[i], s.fluid_.y[i], s.fluid_.z[i], d, g);
+      s.fixedGradX_[i] = g[0]; s.fixedGradY_[i] = g[1]; s.fixedGradZ_[i] = g[2];
+      return d;
     }
-    void finish(std::size_t i, double& rho) {
-      if (s.tabulated_) { // the table holds the fixed particles' share (and grad Phi for the force pass)
-        double d, g[3];
-        s.field_.sample(s.fluid_.x[i], s.fluid_.y[i], s.fluid_.z[i], d, g);
-        s.fixedGradX_[i] = g[0]; s.fixedGradY_[i] = g[1]; s.fixedGradZ_[i] = g[2];
-        rho += d;
-      }
-      RHO[i] = rho;
+    Acc begin(std::size_t i) {
+      Acc a{M[i] * w0, 0.0, s.relisted_[i] != 0, false};
+      if (a.fixedFirst && s.tabulated_) a.fixed = sampleTable(i);
+      return a;
+    }
+    void addFixed(Acc& a) {
+      if (!a.added) a.rho += a.fixed, a.added = true;
+    }
+    void fluid(std::size_t, std::size_t j, const Pair& p, Acc& a) {
+      if (a.fixedFirst) addFixed(a);
+      a.rho += M[j] * s.densityKernel_.value(p.r());
+    }
+    void mirror(std::size_t j, std::size_t i, const Pair& p) { RHO[j] += M[i] * s.densityKernel_.value(p.r()); }
+    void fixed(std::size_t, std::uint32_t k, const Pair& p, Acc& a) {
+      a.fixed += static_cast<double>(FM[k]) * s.densityKernel_.value(p.r());
+    }
+    void finish(std::size_t i, Acc& a) {
+      if (!a.fixedFirst && s.tabulated_) a.fixed = sampleTable(i);
+      addFixed(a);
+      RHO[i] = a.rho;
     }
   } eq2{*this, M, FM, RHO, w0};
   pairs().visit(eq2);
