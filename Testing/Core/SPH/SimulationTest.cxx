@@ -363,3 +363,41 @@ TEST(SPHSimulationBoundaries, PeriodicSideReentersWithSameVelocity) {
   EXPECT_NEAR(sim.fluid().x[0], 9.97 * d + v.x() * dt - 10 * d, 1e-15);
   EXPECT_EQ(sim.fluid().vx[0], v.x());
 }
+
+TEST(SPHSimulation, DensitySumsTheFixedShareOnItsOwnAfterTheFluidPairs) {
+  // Eq. 2's summation order is part of the paper preset's reproducibility (VALIDATION.md, "The restructured
+  // core gives the same results"): rho_i = (m_i W(0) + sum over fluid m_j W) + (sum over fixed m_k W), the
+  // fixed share summed on its own. Written out here for one fluid particle with one fluid and two fixed
+  // neighbours (two terms sum the same in either order, so the list order does not matter), with the
+  // engine's kernel values. The second fixed particle's place is chosen so that the running sum
+  // ((m W(0) + f) + a) + b rounds differently from the oracle's order, so the test tells the orders apart.
+  const double d = 1e-3;
+  ModelParameters m = baseModel(d);
+  m.fixedSums = FixedSumMethod::Exact;
+  const CubicSplineKernel W(m.smoothingLength);
+  const double mi = 1.3e-6, mj = 0.7e-6, fa = 2.9e-6, fb = 3.7e-6;
+  const Eigen::Vector3d xi(0, 0, 0), xj(0.63 * d, 0.2 * d, 0), xa(-0.9 * d, 0.31 * d, 0);
+  const double fluid = mi * W.value(0.0) + mj * W.value((xi - xj).norm());
+  const double a = double(float(fa)) * W.value((xi - xa).norm());
+  Eigen::Vector3d xb;
+  double b = 0;
+  for (int t = 0; t < 1000; ++t) { // the first place (deterministic) where the two orders differ
+    xb = Eigen::Vector3d(0.1 * d, -(1.0 + 0.0007 * t) * d, 0.4 * d);
+    b = double(float(fb)) * W.value((xi - xb).norm());
+    if (fluid + (a + b) != (fluid + a) + b) break;
+  }
+  ASSERT_NE(fluid + (a + b), (fluid + a) + b);
+  ASSERT_GT(a, 0.0);
+  ASSERT_GT(b, 0.0);
+  Domain domain;
+  domain.lower.setConstant(-10 * d);
+  domain.upper.setConstant(10 * d);
+  Simulation sim(m, domain);
+  sim.addFluidParticle(xi, Eigen::Vector3d::Zero(), mi);
+  sim.addFluidParticle(Eigen::Vector3d(5 * d, 5 * d, 5 * d), Eigen::Vector3d::Zero(), mj); // out of reach
+  sim.addFluidParticle(xj, Eigen::Vector3d::Zero(), mj);
+  sim.addFixedParticle(xa, fa);
+  sim.addFixedParticle(xb, fb);
+  sim.updateDensityAndPressure();
+  EXPECT_EQ(sim.fluid().density[0], fluid + (a + b)); // bit for bit
+}
