@@ -375,7 +375,7 @@ void Simulation::sumDensity() {
   // unchanged to the last bit): the fixed particles' share is summed on its own (or sampled from the
   // table) and added after the fluid pairs, except for a relisted particle, whose fixed share comes first.
   struct Eq2 {
-    using RelistedFixedFirst = std::true_type;
+    using RelistedFixedFirst [[maybe_unused]] = std::true_type; // read by PairIteration (SFINAE)
     Simulation& s;
     const double* M; const float* FM; double* RHO; double w0;
     struct Acc {
