@@ -4,6 +4,7 @@
 #include "cementsph/rendering/XYPlot.h"
 
 #include <array>
+#include <cmath>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -30,7 +31,18 @@ int main(int argc, char** argv) {
         std::cerr << "viscosity-trend-plot: " << argv[1] << ": a row has fewer than 4 columns\n";
         return 1;
       }
-      c.push_back(std::stod(cell));
+      std::size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(cell, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || !std::isfinite(v)) {
+        std::cerr << "viscosity-trend-plot: " << argv[1] << ": \"" << cell << "\" is not a number\n";
+        return 1;
+      }
+      c.push_back(v);
     }
   }
   using cementsph::rendering::PlotSeries;
