@@ -389,7 +389,7 @@ void Simulation::sumDensity() {
       return d;
     }
     Acc begin(std::size_t i) {
-      Acc a{M[i] * w0, 0.0, s.relisted_[i] != 0, false};
+      Acc a{M[i] * w0, 0.0, i < s.relisted_.size() && s.relisted_[i] != 0, false};
       if (a.fixedFirst && s.tabulated_) a.fixed = sampleTable(i);
       return a;
     }
