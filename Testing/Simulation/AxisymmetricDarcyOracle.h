@@ -10,7 +10,7 @@
 //
 // Why it is needed: the formula R1 / R2 = (k1 phi2 / (k2 phi1))^(1/3) treats each half as filling
 // alone. The cement that crosses the plane behind the slower half's front is not in it, and at a k ratio of
-// 9 that is a 25 % error (this oracle: 1.53 at the point-source limit against the formula's 2.00).
+// 9 the formula is 30 % high even for a point source (this oracle: 1.53 against the formula's 2.00).
 #pragma once
 
 #include <Eigen/Sparse>
