@@ -31,10 +31,8 @@ class CommandRegistry {
 public:
   static std::vector<Command>& commands();
   static bool add(Command command);
-  // Runs a registered subcommand in this process with the given arguments, as if typed after
-  // `cementsph NAME` (how `demo` runs inject and compare, and `inject` its X-ray pictures). Parse errors
-  // throw CLI::ParseError; the runner's exceptions pass through.
-  static int run(const std::string& name, std::vector<std::string> args);
+  // No command runs another through argv strings: the ones others need have typed entry points
+  // (CommandRequests.h).
 };
 
 } // namespace cementsph::app

@@ -9,6 +9,8 @@
 // itself made by the model (cementsph phantom), so the comparison checks the pipeline; it is not a validation
 // of the model, and metrics.json and the last line say so (post_scan_made_by).
 #include "CommandRegistry.h"
+#include "CommandRequests.h"
+#include "SceneOverrides.h"
 
 #include "cementsph/imaging/AtomicFile.h"
 
@@ -25,7 +27,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using cementsph::app::CommandRegistry;
+using cementsph::app::exactNumber;
 
 struct DemoOptions {
   std::string dataDir = CEMENTSPH_DATA_DIR;
@@ -39,13 +41,6 @@ nlohmann::json readJson(const fs::path& path) {
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
   if (j.is_discarded()) throw std::runtime_error(path.string() + ": missing or not JSON");
   return j;
-}
-
-std::string number(double x) {
-  std::ostringstream s;
-  s.precision(17);
-  s << x;
-  return s.str();
 }
 
 std::string vec3(const nlohmann::json& v) {
@@ -66,15 +61,17 @@ int runVertebraDemo(const DemoOptions& o) {
   std::cerr << "demo --vertebra: injecting " << plan.at("volume_ml").get<double>()
             << " ml into the clinical vertebra phantom (DICOM series, 1 x 1 x 1.5 mm voxels) by a transpedicular plan\n";
   const nlohmann::json& d = plan.at("direction");
-  const std::string direction = "direction=[" + number(d.at(0).get<double>()) + "," + number(d.at(1).get<double>()) +
-                                "," + number(d.at(2).get<double>()) + "]";
-  const int rc = CommandRegistry::run(
-      "inject", {"--ct", (phantom / "pre_dicom").string(), "--scene", (fs::path(o.dataDir) / "scenes" / "paper.json").string(),
-                 "--tip-mm", vec3(plan.at("tip_mm")), "--set", direction, "--volume-ml",
-                 number(plan.at("volume_ml").get<double>()), "--flow-rate-ml-per-s",
-                 number(plan.at("flow_rate_ml_per_s").get<double>()), "--viscosity-pa-s",
-                 number(plan.at("viscosity_pa_s").get<double>()), "--threads", std::to_string(o.threads), "--out",
-                 (out / "inject").string()});
+  cementsph::app::InjectRequest inject;
+  inject.ct = (phantom / "pre_dicom").string();
+  inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
+  inject.overrides = {"direction=[" + exactNumber(d.at(0).get<double>()) + "," + exactNumber(d.at(1).get<double>()) + "," +
+                          exactNumber(d.at(2).get<double>()) + "]",
+                      "tip_mm=" + plan.at("tip_mm").dump(), "volume_ml=" + exactNumber(plan.at("volume_ml").get<double>()),
+                      "flow_rate_ml_per_s=" + exactNumber(plan.at("flow_rate_ml_per_s").get<double>()),
+                      "viscosity_pa_s=" + exactNumber(plan.at("viscosity_pa_s").get<double>())};
+  inject.threads = o.threads;
+  inject.out = (out / "inject").string();
+  const int rc = cementsph::app::runInject(inject);
   if (rc != 0 && rc != 3) return rc;
   const nlohmann::json m = readJson(out / "inject" / "metrics.json");
   nlohmann::json summary;
@@ -104,9 +101,7 @@ int runDemo(const DemoOptions& o) {
   if (!truthFile) throw std::runtime_error(truthPath.string() + ": cannot read the bundled phantom (use --data-dir)");
   const nlohmann::json truth = nlohmann::json::parse(truthFile);
   const nlohmann::json& plan = truth.at("injection");
-  const std::string tip = vec3(plan.at("tip_mm"));
   const fs::path out(o.out);
-  const std::string threads = std::to_string(o.threads);
 
   // Exit status 3 from a step means a picture failed but its numbers are written: go on, report it at the end.
   int status = 0;
@@ -118,20 +113,27 @@ int runDemo(const DemoOptions& o) {
   std::cerr << "demo 1/4: injecting " << plan.at("volume_ml").get<double>() << " ml at "
             << plan.at("flow_rate_ml_per_s").get<double>() << " ml/s, " << plan.at("viscosity_pa_s").get<double>()
             << " Pa.s into the foam phantom (paper's plan), with a simulated CT every second\n";
-  int rc = CommandRegistry::run("inject", {"--ct", (phantom / "pre.nrrd").string(), "--scene",
-                                    (fs::path(o.dataDir) / "scenes" / "paper.json").string(), "--tip-mm", tip,
-                                    "--volume-ml", std::to_string(plan.at("volume_ml").get<double>()),
-                                    "--flow-rate-ml-per-s", std::to_string(plan.at("flow_rate_ml_per_s").get<double>()),
-                                    "--viscosity-pa-s", std::to_string(plan.at("viscosity_pa_s").get<double>()),
-                                    "--set", "simulated_ct_snapshots=true",
-                                    "--threads", threads, "--out", (out / "inject").string()});
+  cementsph::app::InjectRequest inject;
+  inject.ct = (phantom / "pre.nrrd").string();
+  inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
+  inject.overrides = {"simulated_ct_snapshots=true", "tip_mm=" + plan.at("tip_mm").dump(),
+                      "volume_ml=" + exactNumber(plan.at("volume_ml").get<double>()),
+                      "flow_rate_ml_per_s=" + exactNumber(plan.at("flow_rate_ml_per_s").get<double>()),
+                      "viscosity_pa_s=" + exactNumber(plan.at("viscosity_pa_s").get<double>())};
+  inject.threads = o.threads;
+  inject.out = (out / "inject").string();
+  int rc = cementsph::app::runInject(inject);
   if (!step(rc)) return rc;
   const nlohmann::json injectMetrics = readJson(out / "inject" / "metrics.json");
 
   std::cerr << "demo 2/4: comparing with the phantom's post-injection CT\n";
-  rc = CommandRegistry::run("compare", {"--pre", (phantom / "pre.nrrd").string(), "--post", (phantom / "post.nrrd").string(),
-                                 "--simulated", (out / "inject" / "simulated_ct.nrrd").string(),
-                                 "--injection-point-mm", tip, "--out", (out / "compare").string()});
+  cementsph::app::CompareRequest compare;
+  compare.pre = (phantom / "pre.nrrd").string();
+  compare.post = (phantom / "post.nrrd").string();
+  compare.simulated = (out / "inject" / "simulated_ct.nrrd").string();
+  compare.injection = plan.at("tip_mm").get<std::vector<double>>();
+  compare.out = (out / "compare").string();
+  rc = cementsph::app::runCompare(compare);
   if (!step(rc)) return rc;
   const nlohmann::json compareMetrics = readJson(out / "compare" / "metrics.json");
 
@@ -139,10 +141,13 @@ int runDemo(const DemoOptions& o) {
   // post-injection CT, taken as the frame at the end of the injection (the simulation's last frame).
   std::cerr << "demo 3/4: X-ray sequences (Fig. 12): the simulation's frames and the post-injection CT's\n";
   const double endS = injectMetrics.at("simulated_time_s").get<double>();
-  rc = CommandRegistry::run("xray", {"--sequence", (out / "inject").string(), "--reference",
-                                     (phantom / "pre.nrrd").string() + "," + (out / "compare" / "registered_post.nrrd").string(),
-                                     "--reference-times-s", "0," + number(endS), "--threads", threads, "--out",
-                                     (out / "xray").string()});
+  cementsph::app::XrayRequest xrayRequest;
+  xrayRequest.sequence = {(out / "inject").string()};
+  xrayRequest.reference = {(phantom / "pre.nrrd").string(), (out / "compare" / "registered_post.nrrd").string()};
+  xrayRequest.referenceTimesS = {0.0, endS};
+  xrayRequest.drr.threads = o.threads;
+  xrayRequest.out = (out / "xray").string();
+  rc = cementsph::app::runXray(xrayRequest);
   if (!step(rc)) return rc;
   const nlohmann::json xray = readJson(out / "xray" / "metrics.json");
 

@@ -12,6 +12,7 @@
 // computed first and written into a temporary sibling folder that is then moved into place, so bad input
 // or a failed write leaves no partial output.
 #include "CommandRegistry.h"
+#include "CommandRequests.h"
 #include "DrrOptions.h"
 
 #include "cementsph/drr/XraySequence.h"
@@ -52,19 +53,6 @@ using nlohmann::json;
 // Outline / curve colours: simulation blue, reference orange (the surface picture's CT is beige, its
 // simulation blue).
 constexpr std::array<unsigned char, 3> kSequenceRgb{0, 110, 255}, kReferenceRgb{255, 120, 0};
-
-struct XrayArgs {
-  std::vector<std::string> sequence, reference;
-  std::vector<double> sequenceTimesS, referenceTimesS;
-  std::string out;
-  cementsph::app::DrrGeometryArgs drr;
-  double thresholdWaterMm = drr::XraySequenceOptions{}.cementThresholdWaterMm;
-  double toleranceS = 0.0;
-  std::vector<double> injectionPointMm;
-  double searchRadiusMm = drr::XraySequenceOptions{}.injectionSearchRadiusMm;
-  int maxColumns = 6;
-  bool noPictures = false;
-};
 
 std::string number(double x) {
   std::ostringstream s;
@@ -221,8 +209,7 @@ private:
 };
 
 cementsph::app::CommandRunner setupXray(CLI::App& sub) {
-  auto a = std::make_shared<XrayArgs>();
-  a->drr.pixels = {256, 256};
+  auto a = std::make_shared<cementsph::app::XrayRequest>();
   sub.add_option("--sequence", a->sequence,
                  "The frames: an inject output folder written with --set simulated_ct_snapshots=true, or "
                  "volumes in time order (a,b,c; the first is the background, before any cement)")
@@ -264,216 +251,226 @@ cementsph::app::CommandRunner setupXray(CLI::App& sub) {
   sub.add_flag("--no-pictures", a->noPictures, "Do not write xray_frames.png and projected_area.png");
 
   return [a, &sub]() {
-    const auto start = std::chrono::steady_clock::now();
-    auto seconds = [](std::chrono::steady_clock::time_point since) {
-      return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-    };
-    // 1. Check everything that needs no file.
-    (void)cementsph::app::checkedGeometry(a->drr);
-    if (!(a->thresholdWaterMm > 0.0) || !std::isfinite(a->thresholdWaterMm))
-      throw std::runtime_error("--cement-threshold-water-mm must be a positive number of mm");
-    const bool toleranceGiven = sub.count("--match-tolerance-s") > 0;
-    if (toleranceGiven && !(a->toleranceS >= 0.0)) throw std::runtime_error("--match-tolerance-s must be 0 or more");
-    if (a->reference.empty() && !a->referenceTimesS.empty())
-      throw std::runtime_error("--reference-times-s needs --reference");
-    if (a->maxColumns < 2) throw std::runtime_error("--max-columns must be 2 or more");
-    if (!(a->searchRadiusMm >= 0.0)) throw std::runtime_error("--injection-search-radius-mm must be 0 or more");
-    const fs::path out(a->out);
-    if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error(a->out + ": exists and is not a folder");
-    const FrameList frames = frameList(a->sequence, a->sequenceTimesS, "--sequence");
-    std::optional<FrameList> referenceFrames;
-    if (!a->reference.empty()) referenceFrames = frameList(a->reference, a->referenceTimesS, "--reference");
-
-    // 2. Geometry from the first frame, then the DRRs.
-    auto t = std::chrono::steady_clock::now();
-    const auto first = cementsph::imaging::readVolume(frames.paths[0]);
-    const bool fitted = a->drr.sizeOption->count() == 0;
-    drr::XraySequenceOptions options;
-    options.geometry = cementsph::app::geometryForVolume(a->drr, cementsph::imaging::geometryOf(first).physicalBounds(), fitted);
-    options.cementThresholdWaterMm = a->thresholdWaterMm;
-    options.threads = a->drr.threads;
-    if (!a->injectionPointMm.empty())
-      options.injectionPointMm = drr::Vec3{a->injectionPointMm[0], a->injectionPointMm[1], a->injectionPointMm[2]};
-    else
-      options.injectionPointMm = frames.tipMm;
-    options.injectionSearchRadiusMm = a->searchRadiusMm;
-    const drr::XraySequence sequence = project(frames, options, first);
-    std::optional<drr::XraySequence> reference;
-    if (referenceFrames) reference = project(*referenceFrames, options);
-    const double drrSeconds = seconds(t);
-    std::optional<drr::XrayComparison> comparison;
-    if (reference)
-      comparison = drr::compareXraySequences(sequence, *reference, toleranceGiven ? std::optional<double>(a->toleranceS) : std::nullopt);
-
-    // 3. Numbers: sequence.csv and metrics.json.
-    std::ostringstream csv;
-    csv << "time_s,projected_area_mm2,detector_area_mm2,cement_pixels";
-    if (reference)
-      csv << ",reference_time_s,reference_projected_area_mm2,reference_detector_area_mm2,reference_cement_pixels,dice,iou";
-    csv << "\n";
-    auto frameColumns = [](const drr::XrayFrame& f) {
-      return number(f.timeS) + "," + number(f.projectedAreaMm2) + "," + number(f.detectorAreaMm2) + "," +
-             std::to_string(f.cementPixels);
-    };
-    if (comparison) {
-      for (const auto& p : comparison->pairs) {
-        csv << (p.frame ? frameColumns(sequence.frames()[*p.frame]) : number(p.timeS) + ",,,") << ","
-            << (p.reference ? frameColumns(reference->frames()[*p.reference]) : ",,,") << ","
-            << (p.dice ? number(*p.dice) : "") << "," << (p.iou ? number(*p.iou) : "") << "\n";
-      }
-    } else {
-      for (const auto& f : sequence.frames()) csv << frameColumns(f) << "\n";
-    }
-
-    const auto& g = options.geometry;
-    json metrics;
-    metrics["inputs"] = {{"sequence", frames.source == "list" ? json(frames.paths) : json(frames.source)},
-                         {"reference", !referenceFrames ? json(nullptr)
-                                       : referenceFrames->source == "list" ? json(referenceFrames->paths)
-                                                                           : json(referenceFrames->source)}};
-    metrics["geometry"] = {{"sad_mm", g.sadMm},
-                           {"sid_mm", g.sidMm},
-                           {"detector_pixels", {g.rows, g.cols}},
-                           {"detector_size_mm", {g.heightMm, g.widthMm}},
-                           {"detector_fitted_to_first_frame", fitted},
-                           {"isocenter_mm", g.isocenterMm},
-                           {"gantry_angle_deg", g.gantryAngleDeg},
-                           {"parallel", g.parallel},
-                           {"isocentre_magnification", g.isocentreMagnification()}};
-    metrics["segmentation"] = {
-        {"rule", "cement where DRR_k - DRR_0 > threshold (DRR_0: the first frame)"},
-        {"cement_threshold_water_mm", a->thresholdWaterMm},
-        {"cement_threshold_drr", sequence.thresholdDrr()},
-        {"injection_point_mm", options.injectionPointMm ? json(*options.injectionPointMm) : json(nullptr)},
-        {"injection_search_radius_mm", a->searchRadiusMm},
-        {"component_rule", options.injectionPointMm ? "the 8-connected region at the injection point's projection "
-                                                      "(else the nearest within the search radius)"
-                                                    : "none: every pixel above the threshold"},
-        {"drr_unit", "line integral of mu (1/mm) over mm, divided by 10 (plastimatch's)"}};
-    metrics["projected_area_plane"] = "isocentre: detector area x (sad / sid)^2";
-    metrics["frames"] = sequence.frames().size();
-    metrics["final_time_s"] = sequence.frames().back().timeS;
-    metrics["final_projected_area_mm2"] = sequence.frames().back().projectedAreaMm2;
-    json warnings = json::array();
-    if (reference) {
-      metrics["reference_frames"] = reference->frames().size();
-      metrics["final_reference_projected_area_mm2"] = reference->frames().back().projectedAreaMm2;
-      metrics["match_tolerance_s"] = std::isfinite(comparison->toleranceS) ? json(comparison->toleranceS) : json(nullptr);
-      metrics["matched_frames"] = comparison->matched();
-      // The final frame of the sequence and the reference frame it matched.
-      const auto last = std::find_if(comparison->pairs.rbegin(), comparison->pairs.rend(), [](const auto& p) { return p.frame.has_value(); });
-      if (last->reference) {
-        metrics["final_frame"] = {{"time_s", last->timeS},
-                                  {"reference_time_s", reference->frames()[*last->reference].timeS},
-                                  {"dice", *last->dice},
-                                  {"iou", *last->iou}};
-      } else {
-        metrics["final_frame"] = nullptr;
-        warnings.push_back("the sequence's last frame matched no reference frame (see --match-tolerance-s)");
-      }
-    }
-    metrics["warnings"] = warnings;
-
-    // 4. Write everything into a staging folder, then move it into place.
-    t = std::chrono::steady_clock::now();
-    StagedFolder staged(out);
-    const fs::path dir = staged.path();
-    auto writeFrames = [&](const drr::XraySequence& s, const char* prefix) {
-      const double window = windowOf(s);
-      for (std::size_t k = 0; k < s.frames().size(); ++k) {
-        char name[64];
-        std::snprintf(name, sizeof name, "%s_drr_%04zu", prefix, k);
-        const auto& frame = s.frames()[k];
-        cementsph::imaging::writeVolume(cementsph::imaging::imageFromVtk(frame.drr), (dir / (std::string(name) + ".nrrd")).string());
-        cementsph::app::writeDrrPng(frame.drr, (dir / (std::string(name) + ".png")).string(), window);
-      }
-    };
-    writeFrames(sequence, "sequence");
-    if (reference) writeFrames(*reference, "reference");
-    cementsph::imaging::writeTextAtomically((dir / "sequence.csv").string(), csv.str());
-    const double writeSeconds = seconds(t);
-
-    // 5. Pictures (after the numbers; a failed picture is one line and exit status 3, as in `compare`).
-    int status = 0;
-    t = std::chrono::steady_clock::now();
-    std::vector<std::string> pictures;
-    if (!a->noPictures) {
-      auto picture = [&](const char* name, const auto& draw) {
-        try {
-          draw(dir / name);
-          pictures.push_back(name);
-        } catch (const std::exception& e) {
-          std::cerr << "cementsph xray: picture " << name << " not written (the numbers are): " << e.what() << "\n";
-          status = 3;
-        }
-      };
-      picture("xray_frames.png", [&](const fs::path& png) {
-        std::vector<std::string> labels;
-        rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, windowOf(sequence)};
-        rendering::XrayFramesRow refRow{"reference", {}, kReferenceRgb, reference ? windowOf(*reference) : 0.0};
-        for (std::size_t k : pictureColumns(sequence.frames().size(), a->maxColumns)) {
-          const auto& f = sequence.frames()[k];
-          labels.push_back(timeLabel(f.timeS));
-          simRow.panels.push_back({f.drr, f.cementMask});
-          if (!comparison) continue;
-          rendering::XrayPanel panel; // empty: no reference frame at this instant
-          for (const auto& p : comparison->pairs)
-            if (p.frame == k && p.reference)
-              panel = {reference->frames()[*p.reference].drr, reference->frames()[*p.reference].cementMask};
-          refRow.panels.push_back(panel);
-        }
-        std::vector<rendering::XrayFramesRow> rows{simRow};
-        if (comparison) rows.push_back(refRow);
-        rendering::renderXrayFrames(rows, labels, png);
-      });
-      picture("projected_area.png", [&](const fs::path& png) {
-        std::vector<rendering::ProjectedAreaSeries> series;
-        const drr::XraySequence* ref = reference ? &*reference : nullptr;
-        for (const drr::XraySequence* s : {&sequence, ref}) {
-          if (s == nullptr) continue;
-          // The reference's frames are measured instants: markers only (a line would invent values between).
-          rendering::ProjectedAreaSeries curve{s == &sequence ? "simulation" : "reference", {}, {},
-                                               s == &sequence ? kSequenceRgb : kReferenceRgb, s == &sequence};
-          for (const auto& f : s->frames()) {
-            curve.timeS.push_back(f.timeS);
-            curve.areaMm2.push_back(f.projectedAreaMm2);
-          }
-          series.push_back(curve);
-        }
-        rendering::writeProjectedAreaPlot(series, png);
-      });
-    }
-    const double pictureSeconds = seconds(t);
-    metrics["pictures"] = pictures;
-    if (const auto backend = rendering::lastRenderBackend()) metrics["render_backend"] = rendering::renderBackendName(*backend);
-    metrics["timing_s"] = {{"drr_and_segmentation", drrSeconds}, {"write", writeSeconds},
-                           {"pictures", pictureSeconds}, {"total", seconds(start)}};
-    cementsph::imaging::writeTextAtomically((dir / "metrics.json").string(), metrics.dump(2) + "\n");
-    staged.publish();
-
-    // 6. Summary.
-    std::ostringstream s;
-    s << "X-ray sequence: " << sequence.frames().size() << " frames, t " << frames.timesS.front() << " .. "
-      << frames.timesS.back() << " s; detector " << g.rows << "x" << g.cols << " px, " << number(g.heightMm) << " x "
-      << number(g.widthMm) << " mm" << (fitted ? " (fitted)" : "") << ", gantry " << g.gantryAngleDeg << " deg\n"
-      << "final projected cement area " << number(sequence.frames().back().projectedAreaMm2)
-      << " mm^2 at the isocentre (threshold " << a->thresholdWaterMm << " mm of water)\n";
-    if (comparison) {
-      s << "reference: " << reference->frames().size() << " frames, " << comparison->matched() << " matched by time";
-      if (!metrics["final_frame"].is_null())
-        s << "; final frame Dice " << number(metrics["final_frame"]["dice"].get<double>()) << ", IoU "
-          << number(metrics["final_frame"]["iou"].get<double>());
-      s << "\n";
-    }
-    s << "wrote " << (out / "sequence.csv").string() << ", metrics.json, DRR frames"
-      << (pictures.empty() ? "" : ", pictures") << " (" << number(seconds(start)) << " s)\n";
-    std::cout << s.str();
-    for (const auto& w : warnings) std::cerr << "cementsph xray: warning: " << w.get<std::string>() << "\n";
-    return status;
+    a->toleranceGiven = sub.count("--match-tolerance-s") > 0;
+    a->detectorSizeGiven = a->drr.sizeOption->count() > 0;
+    return cementsph::app::runXray(*a);
   };
 }
 
 } // namespace
+
+namespace cementsph::app {
+
+int runXray(const XrayRequest& a) {
+  const auto start = std::chrono::steady_clock::now();
+  auto seconds = [](std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+  };
+  // 1. Check everything that needs no file.
+  (void)cementsph::app::checkedGeometry(a.drr);
+  if (!(a.thresholdWaterMm > 0.0) || !std::isfinite(a.thresholdWaterMm))
+    throw std::runtime_error("--cement-threshold-water-mm must be a positive number of mm");
+  const bool toleranceGiven = a.toleranceGiven;
+  if (toleranceGiven && !(a.toleranceS >= 0.0)) throw std::runtime_error("--match-tolerance-s must be 0 or more");
+  if (a.reference.empty() && !a.referenceTimesS.empty())
+    throw std::runtime_error("--reference-times-s needs --reference");
+  if (a.maxColumns < 2) throw std::runtime_error("--max-columns must be 2 or more");
+  if (!(a.searchRadiusMm >= 0.0)) throw std::runtime_error("--injection-search-radius-mm must be 0 or more");
+  const fs::path out(a.out);
+  if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error(a.out + ": exists and is not a folder");
+  const FrameList frames = frameList(a.sequence, a.sequenceTimesS, "--sequence");
+  std::optional<FrameList> referenceFrames;
+  if (!a.reference.empty()) referenceFrames = frameList(a.reference, a.referenceTimesS, "--reference");
+
+  // 2. Geometry from the first frame, then the DRRs.
+  auto t = std::chrono::steady_clock::now();
+  const auto first = cementsph::imaging::readVolume(frames.paths[0]);
+  const bool fitted = !a.detectorSizeGiven;
+  drr::XraySequenceOptions options;
+  options.geometry = cementsph::app::geometryForVolume(a.drr, cementsph::imaging::geometryOf(first).physicalBounds(), fitted);
+  options.cementThresholdWaterMm = a.thresholdWaterMm;
+  options.threads = a.drr.threads;
+  if (!a.injectionPointMm.empty())
+    options.injectionPointMm = drr::Vec3{a.injectionPointMm[0], a.injectionPointMm[1], a.injectionPointMm[2]};
+  else
+    options.injectionPointMm = frames.tipMm;
+  options.injectionSearchRadiusMm = a.searchRadiusMm;
+  const drr::XraySequence sequence = project(frames, options, first);
+  std::optional<drr::XraySequence> reference;
+  if (referenceFrames) reference = project(*referenceFrames, options);
+  const double drrSeconds = seconds(t);
+  std::optional<drr::XrayComparison> comparison;
+  if (reference)
+    comparison = drr::compareXraySequences(sequence, *reference, toleranceGiven ? std::optional<double>(a.toleranceS) : std::nullopt);
+
+  // 3. Numbers: sequence.csv and metrics.json.
+  std::ostringstream csv;
+  csv << "time_s,projected_area_mm2,detector_area_mm2,cement_pixels";
+  if (reference)
+    csv << ",reference_time_s,reference_projected_area_mm2,reference_detector_area_mm2,reference_cement_pixels,dice,iou";
+  csv << "\n";
+  auto frameColumns = [](const drr::XrayFrame& f) {
+    return number(f.timeS) + "," + number(f.projectedAreaMm2) + "," + number(f.detectorAreaMm2) + "," +
+           std::to_string(f.cementPixels);
+  };
+  if (comparison) {
+    for (const auto& p : comparison->pairs) {
+      csv << (p.frame ? frameColumns(sequence.frames()[*p.frame]) : number(p.timeS) + ",,,") << ","
+          << (p.reference ? frameColumns(reference->frames()[*p.reference]) : ",,,") << ","
+          << (p.dice ? number(*p.dice) : "") << "," << (p.iou ? number(*p.iou) : "") << "\n";
+    }
+  } else {
+    for (const auto& f : sequence.frames()) csv << frameColumns(f) << "\n";
+  }
+
+  const auto& g = options.geometry;
+  json metrics;
+  metrics["inputs"] = {{"sequence", frames.source == "list" ? json(frames.paths) : json(frames.source)},
+                       {"reference", !referenceFrames ? json(nullptr)
+                                     : referenceFrames->source == "list" ? json(referenceFrames->paths)
+                                                                         : json(referenceFrames->source)}};
+  metrics["geometry"] = {{"sad_mm", g.sadMm},
+                         {"sid_mm", g.sidMm},
+                         {"detector_pixels", {g.rows, g.cols}},
+                         {"detector_size_mm", {g.heightMm, g.widthMm}},
+                         {"detector_fitted_to_first_frame", fitted},
+                         {"isocenter_mm", g.isocenterMm},
+                         {"gantry_angle_deg", g.gantryAngleDeg},
+                         {"parallel", g.parallel},
+                         {"isocentre_magnification", g.isocentreMagnification()}};
+  metrics["segmentation"] = {
+      {"rule", "cement where DRR_k - DRR_0 > threshold (DRR_0: the first frame)"},
+      {"cement_threshold_water_mm", a.thresholdWaterMm},
+      {"cement_threshold_drr", sequence.thresholdDrr()},
+      {"injection_point_mm", options.injectionPointMm ? json(*options.injectionPointMm) : json(nullptr)},
+      {"injection_search_radius_mm", a.searchRadiusMm},
+      {"component_rule", options.injectionPointMm ? "the 8-connected region at the injection point's projection "
+                                                    "(else the nearest within the search radius)"
+                                                  : "none: every pixel above the threshold"},
+      {"drr_unit", "line integral of mu (1/mm) over mm, divided by 10 (plastimatch's)"}};
+  metrics["projected_area_plane"] = "isocentre: detector area x (sad / sid)^2";
+  metrics["frames"] = sequence.frames().size();
+  metrics["final_time_s"] = sequence.frames().back().timeS;
+  metrics["final_projected_area_mm2"] = sequence.frames().back().projectedAreaMm2;
+  json warnings = json::array();
+  if (reference) {
+    metrics["reference_frames"] = reference->frames().size();
+    metrics["final_reference_projected_area_mm2"] = reference->frames().back().projectedAreaMm2;
+    metrics["match_tolerance_s"] = std::isfinite(comparison->toleranceS) ? json(comparison->toleranceS) : json(nullptr);
+    metrics["matched_frames"] = comparison->matched();
+    // The final frame of the sequence and the reference frame it matched.
+    const auto last = std::find_if(comparison->pairs.rbegin(), comparison->pairs.rend(), [](const auto& p) { return p.frame.has_value(); });
+    if (last->reference) {
+      metrics["final_frame"] = {{"time_s", last->timeS},
+                                {"reference_time_s", reference->frames()[*last->reference].timeS},
+                                {"dice", *last->dice},
+                                {"iou", *last->iou}};
+    } else {
+      metrics["final_frame"] = nullptr;
+      warnings.push_back("the sequence's last frame matched no reference frame (see --match-tolerance-s)");
+    }
+  }
+  metrics["warnings"] = warnings;
+
+  // 4. Write everything into a staging folder, then move it into place.
+  t = std::chrono::steady_clock::now();
+  StagedFolder staged(out);
+  const fs::path dir = staged.path();
+  auto writeFrames = [&](const drr::XraySequence& s, const char* prefix) {
+    const double window = windowOf(s);
+    for (std::size_t k = 0; k < s.frames().size(); ++k) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%s_drr_%04zu", prefix, k);
+      const auto& frame = s.frames()[k];
+      cementsph::imaging::writeVolume(cementsph::imaging::imageFromVtk(frame.drr), (dir / (std::string(name) + ".nrrd")).string());
+      cementsph::app::writeDrrPng(frame.drr, (dir / (std::string(name) + ".png")).string(), window);
+    }
+  };
+  writeFrames(sequence, "sequence");
+  if (reference) writeFrames(*reference, "reference");
+  cementsph::imaging::writeTextAtomically((dir / "sequence.csv").string(), csv.str());
+  const double writeSeconds = seconds(t);
+
+  // 5. Pictures (after the numbers; a failed picture is one line and exit status 3, as in `compare`).
+  int status = 0;
+  t = std::chrono::steady_clock::now();
+  std::vector<std::string> pictures;
+  if (!a.noPictures) {
+    auto picture = [&](const char* name, const auto& draw) {
+      try {
+        draw(dir / name);
+        pictures.push_back(name);
+      } catch (const std::exception& e) {
+        std::cerr << "cementsph xray: picture " << name << " not written (the numbers are): " << e.what() << "\n";
+        status = 3;
+      }
+    };
+    picture("xray_frames.png", [&](const fs::path& png) {
+      std::vector<std::string> labels;
+      rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, windowOf(sequence)};
+      rendering::XrayFramesRow refRow{"reference", {}, kReferenceRgb, reference ? windowOf(*reference) : 0.0};
+      for (std::size_t k : pictureColumns(sequence.frames().size(), a.maxColumns)) {
+        const auto& f = sequence.frames()[k];
+        labels.push_back(timeLabel(f.timeS));
+        simRow.panels.push_back({f.drr, f.cementMask});
+        if (!comparison) continue;
+        rendering::XrayPanel panel; // empty: no reference frame at this instant
+        for (const auto& p : comparison->pairs)
+          if (p.frame == k && p.reference)
+            panel = {reference->frames()[*p.reference].drr, reference->frames()[*p.reference].cementMask};
+        refRow.panels.push_back(panel);
+      }
+      std::vector<rendering::XrayFramesRow> rows{simRow};
+      if (comparison) rows.push_back(refRow);
+      rendering::renderXrayFrames(rows, labels, png);
+    });
+    picture("projected_area.png", [&](const fs::path& png) {
+      std::vector<rendering::ProjectedAreaSeries> series;
+      const drr::XraySequence* ref = reference ? &*reference : nullptr;
+      for (const drr::XraySequence* s : {&sequence, ref}) {
+        if (s == nullptr) continue;
+        // The reference's frames are measured instants: markers only (a line would invent values between).
+        rendering::ProjectedAreaSeries curve{s == &sequence ? "simulation" : "reference", {}, {},
+                                             s == &sequence ? kSequenceRgb : kReferenceRgb, s == &sequence};
+        for (const auto& f : s->frames()) {
+          curve.timeS.push_back(f.timeS);
+          curve.areaMm2.push_back(f.projectedAreaMm2);
+        }
+        series.push_back(curve);
+      }
+      rendering::writeProjectedAreaPlot(series, png);
+    });
+  }
+  const double pictureSeconds = seconds(t);
+  metrics["pictures"] = pictures;
+  if (const auto backend = rendering::lastRenderBackend()) metrics["render_backend"] = rendering::renderBackendName(*backend);
+  metrics["timing_s"] = {{"drr_and_segmentation", drrSeconds}, {"write", writeSeconds},
+                         {"pictures", pictureSeconds}, {"total", seconds(start)}};
+  cementsph::imaging::writeTextAtomically((dir / "metrics.json").string(), metrics.dump(2) + "\n");
+  staged.publish();
+
+  // 6. Summary.
+  std::ostringstream s;
+  s << "X-ray sequence: " << sequence.frames().size() << " frames, t " << frames.timesS.front() << " .. "
+    << frames.timesS.back() << " s; detector " << g.rows << "x" << g.cols << " px, " << number(g.heightMm) << " x "
+    << number(g.widthMm) << " mm" << (fitted ? " (fitted)" : "") << ", gantry " << g.gantryAngleDeg << " deg\n"
+    << "final projected cement area " << number(sequence.frames().back().projectedAreaMm2)
+    << " mm^2 at the isocentre (threshold " << a.thresholdWaterMm << " mm of water)\n";
+  if (comparison) {
+    s << "reference: " << reference->frames().size() << " frames, " << comparison->matched() << " matched by time";
+    if (!metrics["final_frame"].is_null())
+      s << "; final frame Dice " << number(metrics["final_frame"]["dice"].get<double>()) << ", IoU "
+        << number(metrics["final_frame"]["iou"].get<double>());
+    s << "\n";
+  }
+  s << "wrote " << (out / "sequence.csv").string() << ", metrics.json, DRR frames"
+    << (pictures.empty() ? "" : ", pictures") << " (" << number(seconds(start)) << " s)\n";
+  std::cout << s.str();
+  for (const auto& w : warnings) std::cerr << "cementsph xray: warning: " << w.get<std::string>() << "\n";
+  return status;
+}
+
+} // namespace cementsph::app
 
 CEMENTSPH_REGISTER_COMMAND(xray_command, "xray",
                            "X-ray sequences (paper Fig. 12): DRRs of frame volumes, cement by first-frame "

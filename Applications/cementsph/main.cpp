@@ -58,19 +58,6 @@ bool CommandRegistry::add(Command command) {
   return true;
 }
 
-int CommandRegistry::run(const std::string& name, std::vector<std::string> args) {
-  for (const auto& command : commands()) {
-    if (command.name != name) continue;
-    CLI::App sub{command.summary, name};
-    const auto runner = command.setup(sub);
-    capThreadsOption(sub);
-    std::reverse(args.begin(), args.end()); // CLI11 takes a vector in reverse order
-    sub.parse(args);
-    return runner();
-  }
-  throw std::logic_error("no subcommand '" + name + "'");
-}
-
 } // namespace cementsph::app
 
 namespace {

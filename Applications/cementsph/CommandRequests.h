@@ -1,0 +1,58 @@
+// Typed entry points of the subcommands that other subcommands run: `demo` runs inject, compare and xray,
+// and `inject` its X-ray sequence. Each command's file fills its request from the command line and calls the
+// same function, so no subcommand is re-entered through argv strings. Every field is an option of the
+// command of the same name (`cementsph <command> --help`); the defaults are the options' defaults.
+#pragma once
+
+#include "DrrOptions.h"
+
+#include "cementsph/drr/XraySequence.h"
+#include "cementsph/imaging/CementSegmentation.h"
+#include "cementsph/surfacemetrics/Isosurface.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cementsph::app {
+
+// `cementsph inject`.
+struct InjectRequest {
+  std::string ct, scene, out;
+  std::vector<std::string> overrides; // "key=value" scene overrides, applied in order after the scene file
+  int threads = 0;                    // 0: the cores the load average leaves free
+  bool quiet = false, noPictures = false, allowLarge = false;
+};
+int runInject(const InjectRequest& request);
+
+// `cementsph compare`.
+struct CompareRequest {
+  std::string pre, post, simulated, out;
+  std::vector<double> injection;    // injection point, mm (x, y, z)
+  std::optional<double> thresholdHU; // --threshold-hu: a fixed difference threshold instead of half the contrast
+  double closingMm = 0.0;
+  double searchRadiusMm = imaging::SegmentationOptions{}.injectionSearchRadiusMm;
+  double smoothingVoxels = surfacemetrics::IsosurfaceOptions{}.smoothingSigmaVoxels;
+  bool noRegistration = false, noCementMask = false, noPictures = false;
+};
+int runCompare(const CompareRequest& request);
+
+// `cementsph xray`.
+struct XrayRequest {
+  XrayRequest() { drr.pixels = {256, 256}; }
+  std::vector<std::string> sequence, reference;
+  std::vector<double> sequenceTimesS, referenceTimesS;
+  std::string out;
+  DrrGeometryArgs drr;
+  bool detectorSizeGiven = false; // else the detector is fitted to the first frame's volume
+  double thresholdWaterMm = drr::XraySequenceOptions{}.cementThresholdWaterMm;
+  double toleranceS = 0.0;
+  bool toleranceGiven = false; // else half the shortest frame interval
+  std::vector<double> injectionPointMm;
+  double searchRadiusMm = drr::XraySequenceOptions{}.injectionSearchRadiusMm;
+  int maxColumns = 6;
+  bool noPictures = false;
+};
+int runXray(const XrayRequest& request);
+
+} // namespace cementsph::app
