@@ -1,6 +1,7 @@
 // writeDicomSeries: one int16 CT slice per file with the geometry in Image Position / Orientation
 // Patient, following ITK's ResampleDICOM example (per-slice dictionaries, one study/series UID).
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/imaging/LibraryMessages.h"
 
 #include <itkGDCMImageIO.h>
 #include <itkImageRegionConstIterator.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -107,7 +109,9 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
   try {
     writer->Update();
   } catch (const itk::ExceptionObject& e) {
-    throw std::runtime_error(directory + ": cannot write DICOM series: " + e.GetDescription());
+    if (libraryMessagesVerbose()) std::cerr << oneLine(e.GetDescription()) << "\n"; // ITK's words: --verbose only
+    throw std::runtime_error(directory + ": cannot write the DICOM series (disk full, file size limit or no "
+                                         "permission?)");
   }
 }
 

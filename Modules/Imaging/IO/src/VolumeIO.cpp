@@ -92,10 +92,11 @@ itk::ImageIOBase::Pointer imageIOForExtension(const std::string& path) {
   return nullptr;
 }
 
-// Sane ranges for a CT read from disk: spacings of a micrometre to 10 cm, at most 2^30 voxels (4 GiB of
-// float). A header outside them is damaged or not a CT; refusing it here keeps a 1e300 spacing or a
-// 10^12-voxel claim from reaching the registration, the particle model or the allocator.
-constexpr double kMinSpacingMm = 1e-3, kMaxSpacingMm = 100.0;
+// Sane ranges for a CT read from disk: spacings of a micrometre to 10 cm (detail::kMinSpacingMm..), at most
+// 2^30 voxels (4 GiB of float). A header outside them is damaged or not a CT; refusing it here keeps a 1e300
+// spacing or a 10^12-voxel claim from reaching the registration, the particle model or the allocator.
+using detail::kMaxSpacingMm;
+using detail::kMinSpacingMm;
 constexpr double kMaxVoxels = 1073741824.0;
 
 std::string sizeText(const std::array<std::size_t, 3>& size) {
@@ -120,6 +121,14 @@ void checkGeometry(const std::string& path, const std::array<std::size_t, 3>& si
       throw std::runtime_error(path + ": the origin is not a finite position within 10 km (damaged header?)");
   for (unsigned i = 0; i < 9; ++i)
     if (!std::isfinite(direction[i])) throw std::runtime_error(path + ": the direction matrix is not finite");
+  // Each axis a unit vector: the readers normalise them, so a longer or shorter one (or one whose length
+  // overflowed) is damage. The length is computed without overflow (detail::scaledNorm).
+  for (unsigned c = 0; c < 3; ++c) {
+    const double axis[3] = {direction[c], direction[3 + c], direction[6 + c]};
+    if (!(std::abs(detail::scaledNorm(axis, 3) - 1.0) < 1e-3))
+      throw std::runtime_error(path + ": the direction matrix's axis " + std::to_string(c) +
+                               " is not a unit vector (damaged header?)");
+  }
   double det = direction[0] * (direction[4] * direction[8] - direction[5] * direction[7]) -
                direction[1] * (direction[3] * direction[8] - direction[5] * direction[6]) +
                direction[2] * (direction[3] * direction[7] - direction[4] * direction[6]);
@@ -201,8 +210,10 @@ ImageType::Pointer readVolumeFile(const std::string& path) {
     io->ReadImageInformation();
     messages = capture.release();
   }
+  // MetaIO's own words (shown with --verbose) name no file and no remedy: ours do.
   if (format == detail::VolumeFormat::MetaImage && !oneLine(messages).empty())
-    throw std::runtime_error(path + ": corrupt MetaImage header (" + oneLine(messages) + ")");
+    throw std::runtime_error(path + ": corrupt MetaImage header (the reader could not parse it); check its keys "
+                                    "against the MetaImage format or export it again");
   if (io->GetNumberOfDimensions() != 3)
     throw std::runtime_error(path + ": not a 3-D volume (" + std::to_string(io->GetNumberOfDimensions()) +
                              "-D image)");
@@ -231,7 +242,8 @@ ImageType::Pointer readVolumeFile(const std::string& path) {
   }
   // MetaIO reports a short read only on stderr ("data not read completely"): anything it says is an error.
   if (format == detail::VolumeFormat::MetaImage && !oneLine(messages).empty())
-    throw std::runtime_error(path + ": corrupt or truncated MetaImage (" + oneLine(messages) + ")");
+    throw std::runtime_error(path + ": corrupt or truncated MetaImage (its data could not be read completely); "
+                                    "export it again");
   return reader->GetOutput();
 }
 
@@ -244,7 +256,10 @@ ImageType::Pointer readVolume(const std::string& path) {
   try {
     image = fs::is_directory(path, ec) ? readDicomSeries(path) : readVolumeFile(path);
   } catch (const itk::ExceptionObject& e) {
-    throw std::runtime_error(path + ": cannot read (corrupt or truncated?): " + oneLine(e.GetDescription()));
+    // ITK's description carries source paths and object addresses: only --verbose shows it.
+    if (libraryMessagesVerbose()) std::cerr << oneLine(e.GetDescription()) << "\n";
+    throw std::runtime_error(path + ": cannot read (corrupt or truncated, or not a volume this program reads); "
+                                    "export it again as NRRD, MetaImage or NIfTI");
   } catch (const std::bad_alloc&) {
     throw std::runtime_error(path + ": not enough memory to read it");
   }
@@ -268,7 +283,8 @@ template <typename TImage> void writeImage(const TImage* image, const std::strin
     try {
       writer->Update();
     } catch (const itk::ExceptionObject& e) {
-      throw std::runtime_error(std::string("cannot write: ") + e.GetDescription());
+      if (libraryMessagesVerbose()) std::cerr << oneLine(e.GetDescription()) << "\n"; // ITK's words: --verbose only
+      throw std::runtime_error("cannot write (disk full, file size limit or no permission?)");
     }
   });
 }

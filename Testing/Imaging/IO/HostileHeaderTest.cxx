@@ -1,0 +1,351 @@
+// Hostile volume headers (issue 21): each file is written here, byte by byte, with one damaged field, and
+// readVolume must refuse it with one line naming the file and the field (never a signal, a hang or library
+// text), or, for the valid forms the readers support (multi-member gzip, data-file lists and patterns), read
+// exactly the values written here. The oracle is the file this test wrote: its voxel values and spacing.
+#include "cementsph/imaging/VolumeIO.h"
+
+#include <gtest/gtest.h>
+#include <itkImageFileWriter.h>
+#include <itkNiftiImageIO.h>
+#include <zlib.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace cementsph::imaging;
+
+namespace {
+
+constexpr int kNx = 4, kNy = 3, kNz = 5;
+constexpr std::size_t kVoxels = std::size_t(kNx) * kNy * kNz;
+constexpr std::size_t kSliceBytes = std::size_t(kNx) * kNy * sizeof(float);
+
+fs::path scratch(const std::string& name) {
+  fs::path dir = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "hostile-headers" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// The voxel values every file holds: distinct, so a shifted or missing slice shows.
+std::vector<float> voxels() {
+  std::vector<float> v(kVoxels);
+  for (std::size_t i = 0; i < kVoxels; ++i) v[i] = float(i) * 7.0f - 100.0f;
+  return v;
+}
+
+std::string bytesOf(const std::vector<float>& v, std::size_t first = 0, std::size_t count = kVoxels) {
+  return std::string(reinterpret_cast<const char*>(v.data() + first), count * sizeof(float));
+}
+
+void writeFile(const fs::path& p, const std::string& bytes) {
+  std::ofstream out(p, std::ios::binary);
+  out << bytes;
+}
+
+std::string gzipped(const std::string& data) {
+  z_stream z{};
+  deflateInit2(&z, 6, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY);
+  std::string out(deflateBound(&z, uLong(data.size())) + 64, '\0');
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+  z.avail_in = uInt(data.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = uInt(out.size());
+  deflate(&z, Z_FINISH);
+  out.resize(z.total_out);
+  deflateEnd(&z);
+  return out;
+}
+
+// The refusal every hostile file must get: a runtime_error, one line, naming the file and the field, with
+// none of the libraries' words (ITK exception text, object addresses, MetaIO's or nifti_io's messages).
+void expectRefused(const fs::path& file, const std::string& field) {
+  SCOPED_TRACE(file.filename().string() + " / " + field);
+  try {
+    (void)readVolume(file.string());
+    ADD_FAILURE() << "read without complaint";
+  } catch (const std::runtime_error& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind(file.string(), 0), 0u) << m;
+    EXPECT_NE(m.find(field), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    EXPECT_LT(m.size(), file.string().size() + 300) << m;
+    for (const char* library : {"itk::", "0x", "teem", "MetaIO", "MetaImage:", "nifti_", "znz", "ITK "})
+      EXPECT_EQ(m.find(library), std::string::npos) << library << " in: " << m;
+  }
+}
+
+void expectValues(const fs::path& file, double spacingMm) {
+  SCOPED_TRACE(file.filename().string());
+  ImageType::Pointer image;
+  try {
+    image = readVolume(file.string());
+  } catch (const std::runtime_error& e) {
+    FAIL() << e.what();
+  }
+  const auto g = geometryOf(image);
+  ASSERT_EQ(g.size, (std::array<std::size_t, 3>{kNx, kNy, kNz}));
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.spacing[std::size_t(a)], spacingMm, 1e-6);
+  const auto expected = voxels();
+  for (std::size_t i = 0; i < kVoxels; ++i) ASSERT_EQ(image->GetBufferPointer()[i], expected[i]) << "voxel " << i;
+}
+
+// ---- MetaImage ----
+
+std::string metaHeader(const std::string& override, const std::string& dataFile) {
+  std::string h = "ObjectType = Image\nNDims = 3\nDimSize = 4 3 5\nElementSpacing = 0.5 0.5 0.5\n"
+                  "ElementType = MET_FLOAT\nElementByteOrderMSB = False\n";
+  if (!override.empty()) {
+    const std::string key = override.substr(0, override.find(' '));
+    const auto at = h.find(key + " =");
+    if (at != std::string::npos) h.erase(at, h.find('\n', at) - at + 1);
+    h += override + "\n";
+  }
+  return h + "ElementDataFile = " + dataFile + "\n";
+}
+
+// A .mhd with its slices in s01.raw .. s05.raw (one per slice) and the whole volume in all.raw.
+fs::path metaCase(const fs::path& dir, const std::string& name, const std::string& override,
+                  const std::string& dataFile, const std::string& after = "") {
+  const auto v = voxels();
+  writeFile(dir / "all.raw", bytesOf(v));
+  for (int z = 0; z < kNz; ++z) {
+    char slice[16];
+    std::snprintf(slice, sizeof slice, "s%02d.raw", z + 1);
+    writeFile(dir / slice, bytesOf(v, std::size_t(z) * kNx * kNy, std::size_t(kNx) * kNy));
+  }
+  const fs::path p = dir / name;
+  writeFile(p, metaHeader(override, dataFile) + after);
+  return p;
+}
+
+TEST(HostileMetaImage, ValidPatternAndListAreReadExactly) {
+  const fs::path dir = scratch("meta-valid");
+  expectValues(metaCase(dir, "one.mhd", "", "all.raw"), 0.5);
+  expectValues(metaCase(dir, "pattern.mhd", "", "s%02d.raw 1 5 1"), 0.5);
+  expectValues(metaCase(dir, "list.mhd", "", "LIST", "s01.raw\ns02.raw\ns03.raw\ns04.raw\ns05.raw\n"), 0.5);
+}
+
+TEST(HostileMetaImage, DataFilePatternsThatCrashOrMisreadAreRefused) {
+  const fs::path dir = scratch("meta-pattern");
+  // step 0 divides by zero in MetaIO; a step of 2 names 3 files for 5 slices; printf conversions other than
+  // one integer come from the file into a format string.
+  for (const char* pattern : {"s%02d.raw 1 5 0", "s%02d.raw 1 5 -1", "s%02d.raw 5 1 1", "s%02d.raw 1 5 2",
+                              "s%02d.raw 1 9 1", "s%s.raw 1 5 1", "s%02d%d.raw 1 5 1", "s%n%02d.raw 1 5 1",
+                              "s%999d.raw 1 5 1", "s%ld.raw 1 5 1", "s%02d.raw", "s%02d.raw 1 x 1",
+                              "s%02d.raw 1 99999999999 1"})
+    expectRefused(metaCase(dir, "p.mhd", "", pattern), "ElementDataFile");
+  // A pattern naming a file that is not there.
+  expectRefused(metaCase(dir, "p.mhd", "", "t%02d.raw 1 5 1"), "t01.raw");
+}
+
+TEST(HostileMetaImage, ListWithTooFewFilesIsRefused) {
+  const fs::path dir = scratch("meta-list");
+  expectRefused(metaCase(dir, "l.mhd", "", "LIST", "s01.raw\ns02.raw\ns03.raw\n"), "LIST");
+  expectRefused(metaCase(dir, "l.mhd", "", "LIST", ""), "LIST");
+  expectRefused(metaCase(dir, "l.mhd", "", "LIST", "s01.raw\ns02.raw\nmissing.raw\ns04.raw\ns05.raw\n"), "missing.raw");
+}
+
+TEST(HostileMetaImage, DimensionsAndSpacingsOutsideTheirRangeAreRefused) {
+  const fs::path dir = scratch("meta-numbers");
+  for (const char* ndims : {"NDims = -1", "NDims = 0", "NDims = 4", "NDims = 2", "NDims = abc", "NDims = 3.5",
+                            "NDims = 99999999999999999999"})
+    expectRefused(metaCase(dir, "n.mhd", ndims, "all.raw"), "NDims");
+  for (const char* dims : {"DimSize = 4 3 0", "DimSize = 4 -3 5", "DimSize = 4 3", "DimSize = 4 3 5 6", "DimSize = a b c"})
+    expectRefused(metaCase(dir, "d.mhd", dims, "all.raw"), "DimSize");
+  for (const char* spacing : {"ElementSpacing = nan 0.5 0.5", "ElementSpacing = 0.5 inf 0.5", "ElementSpacing = 0.5 0.5 0",
+                              "ElementSpacing = -0.5 0.5 0.5", "ElementSpacing = 1e300 0.5 0.5", "ElementSpacing = 0.5 0.5"})
+    expectRefused(metaCase(dir, "s.mhd", spacing, "all.raw"), "ElementSpacing");
+  expectRefused(metaCase(dir, "o.mhd", "Offset = 0 nan 0", "all.raw"), "Offset");
+  expectRefused(metaCase(dir, "t.mhd", "TransformMatrix = 1 0 0 0 0 0 0 0 1", "all.raw"), "TransformMatrix");
+  expectRefused(metaCase(dir, "c.mhd", "ElementNumberOfChannels = 3", "all.raw"), "ElementNumberOfChannels");
+  // A value of 100 kB is echoed cut short (expectRefused bounds the message's length); a header over 1 MiB
+  // is not read on.
+  expectRefused(metaCase(dir, "big.mhd", "NDims = " + std::string(100000, '7'), "all.raw"), "NDims");
+  expectRefused(metaCase(dir, "huge.mhd", "Comment = " + std::string(2 << 20, 'x'), "all.raw"), "1 MiB");
+}
+
+// ---- NRRD ----
+
+std::string nrrdHeader(const std::string& geometry, const std::string& encoding = "raw",
+                       const std::string& dataFile = "") {
+  std::string h = "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 3 5\nendian: little\nencoding: " + encoding + "\n" +
+                  geometry + "\n";
+  if (!dataFile.empty()) h += "data file: " + dataFile + "\n";
+  return h;
+}
+
+const std::string kDirections = "space: left-posterior-superior\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\n"
+                                "space origin: (0,0,0)";
+
+TEST(HostileNrrd, SpacingsAndDirectionsOutsideTheirRangeAreRefused) {
+  const fs::path dir = scratch("nrrd-geometry");
+  const std::string data = bytesOf(voxels());
+  auto nrrd = [&](const std::string& geometry) {
+    const fs::path p = dir / "g.nrrd";
+    writeFile(p, nrrdHeader(geometry) + "\n" + data);
+    return p;
+  };
+  expectValues(nrrd(kDirections), 0.5);
+  expectValues(nrrd("spacings: 0.5 0.5 0.5"), 0.5);
+  for (const char* s : {"spacings: nan 0.5 0.5", "spacings: 0.5 inf 0.5", "spacings: 0.5 0.5 0", "spacings: 0.5 0.5 -0.5",
+                        "spacings: 0.5 0.5 abc"})
+    expectRefused(nrrd(s), "spacings");
+  // [1e200, 1e200, 0]: its length overflows a plain sum of squares (inf, or zero once normalised).
+  for (const char* d : {"space directions: (1e200,1e200,0) (0,0.5,0) (0,0,0.5)",
+                        "space directions: (nan,0,0) (0,0.5,0) (0,0,0.5)", "space directions: (0,0,0) (0,0.5,0) (0,0,0.5)",
+                        "space directions: (1e-200,1e-200,0) (0,0.5,0) (0,0,0.5)",
+                        "space directions: (0.5,0,0) (0,inf,0) (0,0,0.5)", "space directions: (0.5,0,0) (0,0.5,0) (0,0,x)"})
+    expectRefused(nrrd(std::string("space: left-posterior-superior\n") + d), "space directions");
+  expectRefused(nrrd("space: left-posterior-superior\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\n"
+                     "space origin: (nan,0,0)"),
+                "space origin");
+}
+
+TEST(HostileNrrd, MultiMemberGzipIsReadAndACorruptMemberRefused) {
+  const fs::path dir = scratch("nrrd-gzip");
+  const std::string data = bytesOf(voxels());
+  const std::string half1 = data.substr(0, data.size() / 3), half2 = data.substr(data.size() / 3);
+  // Two members, as `cat a.gz b.gz` or pigz make: zlib's gzread reads both, so must we.
+  writeFile(dir / "two.nrrd", nrrdHeader(kDirections, "gzip") + "\n" + gzipped(half1) + gzipped(half2));
+  expectValues(dir / "two.nrrd", 0.5);
+  // Ten members, one per few voxels, in a detached data file.
+  std::string many;
+  for (std::size_t at = 0; at < data.size(); at += 24) many += gzipped(data.substr(at, 24));
+  writeFile(dir / "many.raw.gz", many);
+  writeFile(dir / "many.nhdr", nrrdHeader(kDirections, "gzip", "many.raw.gz") + "\n");
+  expectValues(dir / "many.nhdr", 0.5);
+  // The second member damaged: its checksum fails.
+  std::string second = gzipped(half2);
+  second[second.size() - 6] ^= 0x5a;
+  writeFile(dir / "bad.nrrd", nrrdHeader(kDirections, "gzip") + "\n" + gzipped(half1) + second);
+  expectRefused(dir / "bad.nrrd", "compressed data");
+}
+
+TEST(HostileNrrd, Bzip2IsRefusedWithTheReason) {
+  const fs::path dir = scratch("nrrd-bzip2");
+  writeFile(dir / "b.nrrd", nrrdHeader(kDirections, "bzip2") + "\nBZh91AY&SY");
+  expectRefused(dir / "b.nrrd", "bzip2");
+}
+
+TEST(HostileNrrd, DataFileListsAndPatterns) {
+  const fs::path dir = scratch("nrrd-list");
+  const auto v = voxels();
+  for (int z = 0; z < kNz; ++z) {
+    char slice[16];
+    std::snprintf(slice, sizeof slice, "s%02d.raw", z + 1);
+    writeFile(dir / slice, bytesOf(v, std::size_t(z) * kNx * kNy, std::size_t(kNx) * kNy));
+  }
+  writeFile(dir / "list.nhdr", nrrdHeader(kDirections, "raw", "LIST") + "s01.raw\ns02.raw\ns03.raw\ns04.raw\ns05.raw\n");
+  expectValues(dir / "list.nhdr", 0.5);
+  writeFile(dir / "pattern.nhdr", nrrdHeader(kDirections, "raw", "s%02d.raw 1 5 1") + "\n");
+  expectValues(dir / "pattern.nhdr", 0.5);
+  writeFile(dir / "short.nhdr", nrrdHeader(kDirections, "raw", "LIST") + "s01.raw\ns02.raw\n");
+  expectRefused(dir / "short.nhdr", "LIST");
+  for (const char* pattern : {"s%02d.raw 1 5 0", "s%s.raw 1 5 1", "s%02d.raw 1 3 1", "s%n.raw 1 5 1", "s%02d.raw 5 1 1"}) {
+    writeFile(dir / "bad.nhdr", nrrdHeader(kDirections, "raw", pattern) + "\n");
+    expectRefused(dir / "bad.nhdr", "data file");
+  }
+  fs::resize_file(dir / "s03.raw", kSliceBytes / 2);
+  expectRefused(dir / "list.nhdr", "s03.raw");
+}
+
+// ---- NIfTI-1 ----
+
+// The voxels() volume with 0.5 mm spacing, for ITK to write.
+ImageType::Pointer testImage() {
+  auto image = ImageType::New();
+  ImageType::RegionType region;
+  region.SetSize({{kNx, kNy, kNz}});
+  image->SetRegions(region);
+  image->Allocate();
+  const auto v = voxels();
+  std::copy(v.begin(), v.end(), image->GetBufferPointer());
+  image->SetSpacing(0.5);
+  return image;
+}
+
+// A valid single-file .nii written by ITK, then one field overwritten at its byte offset (NIfTI-1 layout).
+class NiftiField {
+public:
+  explicit NiftiField(const fs::path& dir) : dir_(dir) {
+    writeVolume(testImage(), (dir / "valid.nii").string(), false);
+    std::ifstream in(dir / "valid.nii", std::ios::binary);
+    bytes_.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  template <typename T> fs::path with(std::size_t offset, T value, const std::string& name = "f.nii") const {
+    std::string b = bytes_;
+    std::memcpy(b.data() + offset, &value, sizeof value);
+    writeFile(dir_ / name, b);
+    return dir_ / name;
+  }
+  fs::path withTwo(std::size_t o1, std::int16_t code, std::size_t o2, float value) const {
+    std::string b = bytes_;
+    std::memcpy(b.data() + o1, &code, 2);
+    std::memcpy(b.data() + o2, &value, 4);
+    writeFile(dir_ / "f.nii", b);
+    return dir_ / "f.nii";
+  }
+  const std::string& bytes() const { return bytes_; }
+
+private:
+  fs::path dir_;
+  std::string bytes_;
+};
+
+TEST(HostileNifti, NonFiniteOrientationAndSpacingAreRefused) {
+  const fs::path dir = scratch("nifti-fields");
+  const NiftiField nii(dir);
+  expectValues(dir / "valid.nii", 0.5);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  // sform_code (254) = 1 with a NaN in srow_x (280); qform_code (252) = 1 with a NaN quatern_b (256).
+  expectRefused(nii.withTwo(254, 1, 280, nan), "sform");
+  expectRefused(nii.withTwo(254, 1, 300, inf), "sform");
+  expectRefused(nii.withTwo(252, 1, 256, nan), "qform");
+  expectRefused(nii.withTwo(252, 1, 272, inf), "qform");
+  // pixdim[1..3] (80, 84, 88): nifti_io would make each of these 1 mm.
+  for (float bad : {nan, inf, 0.0f, -0.5f, 1e30f})
+    for (std::size_t at : {80u, 84u, 88u}) expectRefused(nii.with(at, bad), "pixdim");
+  // dim (40): axes and sizes.
+  expectRefused(nii.with(40, std::int16_t(0)), "dim[0]");
+  expectRefused(nii.with(40, std::int16_t(9)), "dim[0]");
+  expectRefused(nii.with(44, std::int16_t(-4)), "dim[2]");
+  expectRefused(nii.with(70, std::int16_t(17)), "datatype");
+}
+
+TEST(HostileNifti, VoxOffsetOutsideTheFileIsRefused) {
+  const fs::path dir = scratch("nifti-offset");
+  const NiftiField nii(dir);
+  for (float offset : {-352.0f, 0.0f, 100.0f, 352.5f, 1e9f, std::numeric_limits<float>::quiet_NaN()})
+    expectRefused(nii.with(108, offset), "vox_offset");
+  // Past the end by a single voxel.
+  const float pastEnd = float(nii.bytes().size() - kVoxels * sizeof(float) + sizeof(float));
+  expectRefused(nii.with(108, pastEnd), "vox_offset");
+  // The same file gzipped in two members reads as the plain one.
+  const std::string& b = nii.bytes();
+  writeFile(dir / "two.nii.gz", gzipped(b.substr(0, 400)) + gzipped(b.substr(400)));
+  expectValues(dir / "two.nii.gz", 0.5);
+}
+
+TEST(HostileNifti, ShortImgOfAPairIsRefused) {
+  const fs::path dir = scratch("nifti-pair");
+  const auto image = testImage();
+  auto writer = itk::ImageFileWriter<ImageType>::New();
+  writer->SetImageIO(itk::NiftiImageIO::New());
+  writer->SetFileName((dir / "pair.hdr").string());
+  writer->SetInput(image);
+  writer->Update();
+  ASSERT_TRUE(fs::exists(dir / "pair.img"));
+  expectValues(dir / "pair.hdr", 0.5);
+  fs::resize_file(dir / "pair.img", fs::file_size(dir / "pair.img") - kSliceBytes);
+  expectRefused(dir / "pair.hdr", ".img");
+  fs::remove(dir / "pair.img");
+  expectRefused(dir / "pair.hdr", ".img");
+}
+
+} // namespace
