@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 using namespace cementsph::scene;
 using nlohmann::json;
@@ -244,4 +245,89 @@ TEST(SceneConfig, ABundledCementCuresExponentiallyFromTheLawsViscosityAndBadCuri
   json tableNone = minimal();
   tableNone["curing_model"] = "table";
   expectError(tableNone, "curing_model");
+}
+
+// Issue 21: limits that follow from physics or the machine. The oracles are the limits' definitions: an
+// injection of volume_ml at flow_rate_ml_per_s lasts volume/flow s and must be within a day (86400 s);
+// it may write at most 10000 snapshots (duration / snapshot_interval_s); sound speed 1e-3..1500 m/s and
+// drag coefficient 1e-6..1e6. Each is tested 1 % either side of its limit.
+TEST(SceneConfig, LimitsFromPhysicsAndTheMachineNameTheKey) {
+  const double volumeMl = 5.0, dayS = 86400.0;
+  json j = minimal();
+  j["volume_ml"] = volumeMl;
+  j["flow_rate_ml_per_s"] = volumeMl / dayS * 0.99;
+  expectError(j, "flow_rate_ml_per_s");
+  j["flow_rate_ml_per_s"] = 1e-300;
+  expectError(j, "flow_rate_ml_per_s");
+  j["flow_rate_ml_per_s"] = volumeMl / dayS * 1.01;
+  j["snapshot_interval_s"] = 1000.0;
+  EXPECT_EQ(errorOf(j), "");
+
+  json s = minimal();
+  s["volume_ml"] = volumeMl;
+  s["flow_rate_ml_per_s"] = 0.05; // 100 s of injection
+  for (double interval : {100.0 / 10000 * 0.99, 1e-300, 4.9e-324}) {
+    s["snapshot_interval_s"] = interval;
+    expectError(s, "snapshot_interval_s");
+  }
+  s["snapshot_interval_s"] = 100.0 / 10000 * 1.01;
+  EXPECT_EQ(errorOf(s), "");
+
+  for (const auto& [key, bad, good] : {std::tuple{"sound_speed_m_per_s", 1500.0 * 1.01, 1500.0 * 0.99},
+                                       std::tuple{"sound_speed_m_per_s", 1e-3 * 0.99, 1e-3 * 1.01},
+                                       std::tuple{"drag_coefficient", 1e6 * 1.01, 1e6 * 0.99},
+                                       std::tuple{"drag_coefficient", 1e-6 * 0.99, 1e-6 * 1.01}}) {
+    json k = minimal();
+    k[key] = bad;
+    expectError(k, key);
+    k[key] = good;
+    EXPECT_EQ(errorOf(k), "") << key << " " << good;
+  }
+  // NaN and infinity cannot be written in JSON; from the command line they are refused naming the key.
+  for (const char* key : {"sound_speed_m_per_s", "drag_coefficient", "snapshot_interval_s", "flow_rate_ml_per_s",
+                          "fixed_field_spacing_over_h", "max_displacement_over_h", "particle_radius_mm"})
+    for (const char* value : {"nan", "NaN", "inf", "-inf", "1e999"})
+      expectError(minimal(), key, {std::string(key) + "=" + value});
+}
+
+// A value or key of a megabyte is echoed cut short: the message stays one line of bounded length.
+TEST(SceneConfig, HugeValuesAreNotEchoedWhole) {
+  const std::string huge(1 << 20, 'x');
+  for (const char* key : {"preset", "integrator", "pressure_model", "viscosity_law", "bone_model", "cement"}) {
+    json j = minimal();
+    j[key] = huge;
+    const std::string e = errorOf(j);
+    EXPECT_NE(e.find(key), std::string::npos) << e.substr(0, 200);
+    EXPECT_LT(e.size(), 300u) << key;
+  }
+  json k = minimal();
+  k[huge] = 1;
+  EXPECT_LT(errorOf(k).size(), 300u);
+  EXPECT_LT(errorOf(minimal(), {huge}).size(), 300u);
+  EXPECT_LT(errorOf(minimal(), {"preset=" + huge}).size(), 300u);
+}
+
+// A scene file is one JSON object and nothing else: NUL bytes (which a stream parser takes for the end of
+// input) or text after the object are refused naming the file; trailing white space is fine.
+TEST(SceneConfig, TrailingNulBytesOrGarbageAreRefused) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-scene-trailing";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "scene.json").string();
+  const std::string object = R"({"tip_mm": [4, 5, 6]})";
+  auto write = [&](const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; };
+  write(object + "\n\t \n");
+  EXPECT_DOUBLE_EQ(loadSceneFile(path).tipMm->z(), 6.0);
+  for (const std::string& tail : {std::string("\0\0\0", 3), std::string("\0garbage", 8), std::string(" garbage"),
+                                  std::string("{}"), std::string(" ,")}) {
+    write(object + tail);
+    try {
+      loadSceneFile(path);
+      ADD_FAILURE() << "accepted a scene followed by " << tail.size() << " bytes";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + ": ", 0), 0u) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+    }
+  }
+  write(std::string("\0", 1) + object);
+  EXPECT_THROW(loadSceneFile(path), std::invalid_argument);
 }

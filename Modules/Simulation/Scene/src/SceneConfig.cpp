@@ -16,9 +16,31 @@ namespace {
 
 using nlohmann::json;
 
-[[noreturn]] void fail(const std::string& key, const std::string& what) {
-  throw std::invalid_argument("scene: key '" + key + "' " + what);
+// A value from a scene or the command line, echoed in a message: at most 40 characters and no control
+// characters, so a 50 MB value (or one with newlines) still gives one readable line.
+std::string shown(const std::string& value) {
+  std::string out;
+  for (unsigned char c : value) {
+    if (out.size() >= 40) return out + "...";
+    out += (c < 32 || c == 127) ? '?' : char(c);
+  }
+  return out;
 }
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) {
+  throw std::invalid_argument("scene: key '" + shown(key) + "' " + what);
+}
+
+// Limits that follow from the physics or the machine (README "Bad input"): bone cement sets within
+// minutes, so an injection taking longer than a day is a typo (and a run over that many simulated seconds
+// would not end); a snapshot count above 10000 fills the disk and the folder (a hostile 1e-300 s interval
+// wrote 233k files). The SPH model's artificial sound speed is 1 m/s in the paper: one above water's
+// 1500 m/s makes the time step (h / c) uselessly small; a drag coefficient (calibrated near 1) beyond
+// 1e-6..1e6 is a typo.
+constexpr double kMaxInjectionS = 86400.0;
+constexpr double kMaxSnapshots = 10000.0;
+constexpr double kMinSoundSpeed = 1e-3, kMaxSoundSpeed = 1500.0;
+constexpr double kMinDrag = 1e-6, kMaxDrag = 1e6;
 
 double number(const json& v, const std::string& key) {
   if (!v.is_number()) fail(key, "must be a number");
@@ -34,6 +56,10 @@ Eigen::Vector3d vector3(const json& v, const std::string& key) {
 
 std::string text(const json& v, const std::string& key) {
   if (!v.is_string()) fail(key, "must be a string");
+  // Every text key is a short name (a preset, a law, a cement): a longer value is not one, and refusing it
+  // here keeps it out of the messages that echo it.
+  if (v.get_ref<const std::string&>().size() > 200)
+    fail(key, "must be a short name (got " + std::to_string(v.get_ref<const std::string&>().size()) + " characters)");
   return v.get<std::string>();
 }
 
@@ -48,7 +74,8 @@ void requirePositive(double x, const std::string& key) {
 } // namespace
 
 SceneConfig scenePreset(const std::string& name) {
-  if (name != "paper") throw std::invalid_argument("scene: key 'scene_preset' must be \"paper\" (got \"" + name + "\")");
+  if (name != "paper")
+    throw std::invalid_argument("scene: key 'scene_preset' must be \"paper\" (got \"" + shown(name) + "\")");
   return SceneConfig{}; // the struct's defaults are the paper's values
 }
 
@@ -66,7 +93,7 @@ void applySceneJson(SceneConfig& s, const json& j) {
       try {
         (void)sph::modelPreset(s.modelPreset);
       } catch (const std::invalid_argument&) {
-        fail(key, "must be \"default\" or \"paper\" (got \"" + s.modelPreset + "\")");
+        fail(key, "must be \"default\" or \"paper\" (got \"" + shown(s.modelPreset) + "\")");
       }
     } else if (key == "particle_radius_mm") s.particleRadiusMm = number(v, key);
     else if (key == "tip_mm") s.tipMm = vector3(v, key);
@@ -133,7 +160,7 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "viscosity_law") {
       s.viscosityLaw = text(v, key);
       if (s.viscosityLaw != "newtonian" && s.viscosityLaw != "power-law" && s.viscosityLaw != "carreau")
-        fail(key, "must be \"newtonian\", \"power-law\" or \"carreau\" (got \"" + s.viscosityLaw + "\")");
+        fail(key, "must be \"newtonian\", \"power-law\" or \"carreau\" (got \"" + shown(s.viscosityLaw) + "\")");
     } else if (key == "consistency_pa_s_n") s.rheology.consistencyPaSn = number(v, key);
     else if (key == "flow_index") s.rheology.flowIndex = number(v, key);
     else if (key == "zero_shear_viscosity_pa_s") s.rheology.zeroShearViscosityPaS = number(v, key);
@@ -159,14 +186,14 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "curing_model") {
       s.curingModel = text(v, key);
       if (*s.curingModel != "none" && *s.curingModel != "table" && *s.curingModel != "exponential")
-        fail(key, "must be \"none\", \"table\" or \"exponential\" (got \"" + *s.curingModel + "\")");
+        fail(key, "must be \"none\", \"table\" or \"exponential\" (got \"" + shown(*s.curingModel) + "\")");
     } else if (key == "curing_time_s") s.curingTimeS = number(v, key);
     else if (key == "cured_viscosity_pa_s") s.curedViscosityPaS = number(v, key);
     else if (key == "curing_reference_time_s") s.curingReferenceTimeS = number(v, key);
     else if (key == "bone_model") {
       s.boneModel = text(v, key);
       if (s.boneModel != "auto" && s.boneModel != "pore-resolved" && s.boneModel != "continuum")
-        fail(key, "must be \"auto\", \"pore-resolved\" or \"continuum\" (got \"" + s.boneModel + "\")");
+        fail(key, "must be \"auto\", \"pore-resolved\" or \"continuum\" (got \"" + shown(s.boneModel) + "\")");
     } else if (key == "marrow_hu") s.bone.marrowHu = number(v, key);
     else if (key == "bone_tissue_hu") s.bone.boneTissueHu = number(v, key);
     else if (key == "kozeny_carman_diameter_mm") s.bone.kozenyCarmanDiameterMm = number(v, key);
@@ -187,14 +214,14 @@ void applySceneJson(SceneConfig& s, const json& j) {
         fail(key, e.what());
       }
     } else
-      throw std::invalid_argument("scene: unknown key '" + key + "'");
+      throw std::invalid_argument("scene: unknown key '" + shown(key) + "'");
   }
 }
 
 void applySceneOverride(SceneConfig& s, const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw std::invalid_argument("scene: override '" + assignment + "' must be key=value");
+    throw std::invalid_argument("scene: override '" + shown(assignment) + "' must be key=value");
   const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
   if (value.empty()) fail(key, "has no value");
   json v = json::parse(value, nullptr, /*allow_exceptions=*/false);
@@ -218,6 +245,13 @@ void SceneConfig::validate() const {
   requirePositive(cannulaLengthMm, "cannula_length_mm");
   requirePositive(flowRateMlPerS, "flow_rate_ml_per_s");
   requirePositive(volumeMl, "volume_ml");
+  if (!(injectionDurationS() <= kMaxInjectionS)) {
+    std::ostringstream what;
+    what << "is too small: " << flowRateMlPerS << " ml/s takes " << injectionDurationS() << " s for volume_ml "
+         << volumeMl << ", longer than a day (86400 s; cement sets in minutes): use at least " << volumeMl / kMaxInjectionS
+         << " ml/s";
+    fail("flow_rate_ml_per_s", what.str());
+  }
   requirePositive(viscosityPaS, "viscosity_pa_s");
   if (viscosityRatePaPerS) requirePositive(*viscosityRatePaPerS, "viscosity_rate_pa_per_s");
   if (!viscosityTable.empty()) {
@@ -230,6 +264,12 @@ void SceneConfig::validate() const {
   requirePositive(roiSizeMm, "roi_size_mm");
   if (roiSizeMm < 4 * spacingM() * 1e3) fail("roi_size_mm", "must be at least 4 particle diameters");
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
+  if (!(injectionDurationS() / snapshotIntervalS <= kMaxSnapshots)) {
+    std::ostringstream what;
+    what << "is too small: " << snapshotIntervalS << " s over a " << injectionDurationS() << " s injection is more than "
+         << kMaxSnapshots << " snapshots: use at least " << injectionDurationS() / kMaxSnapshots << " s";
+    fail("snapshot_interval_s", what.str());
+  }
   requirePositive(solidMassFactor, "solid_mass_factor");
   // Trabecular bone 2.7e-11 .. 2e-8 m^2 (model-notes); outside 1e-18 .. 1e-3 m^2 a value is a typo.
   if (porePermeabilityM2 && !(*porePermeabilityM2 >= 1e-18 && *porePermeabilityM2 <= 1e-3))
@@ -244,8 +284,15 @@ void SceneConfig::validate() const {
   (void)curing(); // the curing keys, each error naming its key
   if (!(capillaryTensionNPerM >= 0) || !std::isfinite(capillaryTensionNPerM) || capillaryTensionNPerM > 1.0)
     fail("capillary_tension_n_per_m", "must be in [0, 1] N/m (0: no capillary entry)");
-  if (dragCoefficient) requirePositive(*dragCoefficient, "drag_coefficient");
-  if (soundSpeedMPerS) requirePositive(*soundSpeedMPerS, "sound_speed_m_per_s");
+  auto requireWithin = [](const std::optional<double>& x, double lo, double hi, const char* key, const char* unit) {
+    if (x && !(*x >= lo && *x <= hi)) {
+      std::ostringstream what;
+      what << "must be " << lo << ".." << hi << unit << " (got " << *x << ")";
+      fail(key, what.str());
+    }
+  };
+  requireWithin(dragCoefficient, kMinDrag, kMaxDrag, "drag_coefficient", "");
+  requireWithin(soundSpeedMPerS, kMinSoundSpeed, kMaxSoundSpeed, "sound_speed_m_per_s", " m/s");
   auto requireFraction = [](const std::optional<double>& x, double upper, const char* key) {
     if (x && !(*x > 0 && *x <= upper)) fail(key, "must be > 0 and <= " + std::to_string(upper).substr(0, 3));
   };
@@ -282,10 +329,22 @@ SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrid
 }
 
 SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot open the scene file");
-  json j = json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) throw std::invalid_argument(path + ": not valid JSON");
+  // The whole file is the JSON object: read it all (a scene is a few kB; 16 MiB is far past any), and refuse
+  // a NUL byte, which the stream parser takes for the end of input, accepting the garbage after it.
+  constexpr std::size_t kMaxSceneBytes = std::size_t(16) << 20;
+  std::string text(kMaxSceneBytes + 1, '\0');
+  in.read(text.data(), std::streamsize(text.size()));
+  text.resize(std::size_t(in.gcount()));
+  if (text.size() > kMaxSceneBytes)
+    throw std::invalid_argument(path + ": the scene file is over 16 MiB; a scene is a JSON object of a few kB");
+  if (const auto nul = text.find('\0'); nul != std::string::npos)
+    throw std::invalid_argument(path + ": a NUL byte at offset " + std::to_string(nul) +
+                                ": not a text JSON file (damaged, or something appended to it)");
+  json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded())
+    throw std::invalid_argument(path + ": not valid JSON (one object, nothing after it); check the file");
   try {
     return sceneFromJson(j, overrides);
   } catch (const std::invalid_argument& e) {
@@ -294,7 +353,7 @@ SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string
     for (const std::string& o : overrides) {
       const std::string key = o.substr(0, o.find('='));
       if (what.find("'" + key + "'") != std::string::npos)
-        throw std::invalid_argument("override " + o + " (command line): " + what);
+        throw std::invalid_argument("override " + shown(o) + " (command line): " + what);
     }
     throw std::invalid_argument(path + ": " + what);
   }
