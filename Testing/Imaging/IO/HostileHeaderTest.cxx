@@ -9,10 +9,13 @@
 #include <itkNiftiImageIO.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <vector>
 
@@ -346,6 +349,77 @@ TEST(HostileNifti, ShortImgOfAPairIsRefused) {
   expectRefused(dir / "pair.hdr", ".img");
   fs::remove(dir / "pair.img");
   expectRefused(dir / "pair.hdr", ".img");
+}
+
+// ---- DICOM ----
+
+std::string readAll(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The refusal of a series folder: one line naming the folder and the slice file, no library text.
+void expectSeriesRefused(const fs::path& folder, const fs::path& slice, const std::string& problem) {
+  SCOPED_TRACE(slice.filename().string() + " / " + problem);
+  try {
+    (void)readVolume(folder.string());
+    ADD_FAILURE() << "read without complaint";
+  } catch (const std::runtime_error& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind(folder.string(), 0), 0u) << m;
+    EXPECT_NE(m.find(slice.filename().string()), std::string::npos) << m;
+    EXPECT_NE(m.find(problem), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    for (const char* library : {"itk::", "0x", "gdcm", "GDCM ERROR"}) EXPECT_EQ(m.find(library), std::string::npos) << m;
+  }
+}
+
+std::vector<fs::path> sliceFiles(const fs::path& folder) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(folder)) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// MONOCHROME1 only changes how grey is displayed; ITK's reader inverts the stored values, so the HU would
+// come out wrong: refused, naming the slice. The series as written (MONOCHROME2) reads back the values.
+TEST(HostileDicom, Monochrome1IsRefusedNamingTheSlice) {
+  const fs::path dir = scratch("dicom-mono1");
+  writeDicomSeries(testImage(), (dir / "series").string(), -1024.0);
+  const auto back = readVolume((dir / "series").string());
+  const auto v = voxels();
+  for (std::size_t i = 0; i < kVoxels; ++i) ASSERT_NEAR(back->GetBufferPointer()[i], std::round(v[i]), 0.5) << i;
+  const fs::path slice = sliceFiles(dir / "series")[2];
+  std::string bytes = readAll(slice);
+  const auto at = bytes.find("MONOCHROME2");
+  ASSERT_NE(at, std::string::npos);
+  bytes[at + 10] = '1';
+  writeFile(slice, bytes);
+  expectSeriesRefused(dir / "series", slice, "MONOCHROME1");
+}
+
+// A slice whose Pixel Data element is two rows short, in a file still longer than rows x columns x 2 bytes
+// (the header makes up the difference): it would be read shifted. Refused naming the slice.
+TEST(HostileDicom, ShortPixelDataIsRefusedNamingTheSlice) {
+  const fs::path dir = scratch("dicom-short");
+  writeDicomSeries(testImage(), (dir / "series").string(), 0.0);
+  const fs::path slice = sliceFiles(dir / "series")[3];
+  std::string bytes = readAll(slice);
+  const std::string tag("\xe0\x7f\x10\x00", 4);
+  const auto at = bytes.rfind(tag);
+  ASSERT_NE(at, std::string::npos);
+  const bool explicitVr = bytes.compare(at + 4, 2, "OW") == 0 || bytes.compare(at + 4, 2, "OB") == 0;
+  const std::size_t lengthAt = at + (explicitVr ? 8 : 4);
+  std::uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + lengthAt, 4);
+  ASSERT_EQ(length, std::uint32_t(kNx * kNy * 2)) << "16-bit slices expected";
+  const std::uint32_t cut = 2 * kNx * 2; // two rows
+  length -= cut;
+  std::memcpy(bytes.data() + lengthAt, &length, 4);
+  bytes.resize(bytes.size() - cut);
+  ASSERT_GE(bytes.size(), std::size_t(kNx * kNy * 2)); // the old check (file size) would pass it
+  writeFile(slice, bytes);
+  expectSeriesRefused(dir / "series", slice, "pixel data holds");
 }
 
 } // namespace

@@ -199,6 +199,12 @@ std::optional<DicomHeader> readDicomHeader(const std::string& path) {
                                         std::uintmax_t((h.bitsAllocated + 7) / 8) * std::uintmax_t(std::max(1, h.frames));
       std::error_code ec;
       if (fs::file_size(path, ec) < pixelBytes) h.hasPixelData = false;
+      // The Pixel Data element itself must hold them: a short element inside a longer file (other elements
+      // around it) would be read shifted or padded with whatever follows.
+      const gdcm::ByteValue* pixels = ds.GetDataElement(kPixelData).GetByteValue();
+      h.pixelDataBytes = pixels ? std::uintmax_t(pixels->GetLength()) : 0;
+      h.pixelDataBytesNeeded = pixelBytes;
+      if (h.pixelDataBytes < pixelBytes) h.hasPixelData = false;
     }
   } catch (const std::exception&) {
     return std::nullopt;
@@ -211,12 +217,22 @@ std::string ctSliceProblem(const DicomHeader& h) {
   if (h.modality != "CT")
     return "modality is " + (h.modality.empty() ? std::string("missing") : "'" + h.modality + "'") +
            ", not CT: only CT values are Hounsfield units";
+  // MONOCHROME1 only says how to display the grey (bright = low); a CT's HU are Rescale Slope x stored value +
+  // Rescale Intercept either way. ITK's DICOM reader inverts MONOCHROME1 stored values before rescaling, which
+  // turns bone into air: refused rather than read wrong.
+  if (h.samplesPerPixel == 1 && h.photometric == "MONOCHROME1")
+    return "photometric interpretation MONOCHROME1 (inverted grey), which this program's DICOM reader would "
+           "invert into wrong HU; export the series as MONOCHROME2";
   if (h.samplesPerPixel != 1 || (h.photometric != "MONOCHROME1" && h.photometric != "MONOCHROME2"))
     return "a colour image (photometric interpretation '" + h.photometric + "', " + std::to_string(h.samplesPerPixel) +
            " samples per pixel); a CT is one grey value per pixel";
   if (h.frames != 1)
     return "a multi-frame file (" + std::to_string(h.frames) +
            " frames), not supported: export the CT as one file per slice";
+  if (h.hasPixelData == false && h.pixelDataBytesNeeded > 0 && h.pixelDataBytes < h.pixelDataBytesNeeded)
+    return "its pixel data holds " + std::to_string(h.pixelDataBytes) + " bytes where " + std::to_string(h.rows) + " rows x " +
+           std::to_string(h.columns) + " columns need " + std::to_string(h.pixelDataBytesNeeded) +
+           " (truncated or damaged slice); export the series again";
   if (!h.hasPixelData) return "no pixel data, or fewer bytes than its rows and columns need (truncated?)";
   if (h.rows < 2 || h.columns < 2) return "has no usable image size (rows " + std::to_string(h.rows) + ", columns " +
                                           std::to_string(h.columns) + ")";

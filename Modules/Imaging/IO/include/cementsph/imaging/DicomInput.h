@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@ struct DicomHeader {
   std::string sopClass, seriesUid, modality, photometric;
   int samplesPerPixel = 0, frames = 1, rows = 0, columns = 0, bitsAllocated = 0;
   bool hasPixelData = false;
+  // Uncompressed pixel data: the element's length and what rows x columns x samples x bytes x frames need.
+  std::uintmax_t pixelDataBytes = 0, pixelDataBytesNeeded = 0;
   std::optional<std::array<double, 3>> position;    // Image Position (Patient), mm
   std::optional<std::array<double, 6>> orientation; // Image Orientation (Patient): row, column cosines
   std::optional<std::array<double, 2>> pixelSpacing; // mm: between rows, between columns
