@@ -1,10 +1,13 @@
 // vtkSPHInjectionFilter: the inject runner (cementsph/scene/InjectionRunner.h) as a VTK algorithm.
 //
-// Input port 0: the CT as vtkImageData (HU scalars, mm geometry, identity direction).
+// Input port 0: the CT as vtkImageData (HU scalars, mm geometry, any direction matrix: AxisAlignedCT.h).
 // Output port 0: the fluid particles at the end of injection, vtkPolyData (mm; point arrays velocity_m_per_s,
 //   density_kg_per_m3, pressure_pa, age_s).
-// Output port 1: the simulated CT, vtkImageData on the input's full grid: HU_pre + k rho_fluid / rho0 inside
-//   the region of interest, the input's HU outside it (the files the runner writes hold the ROI only).
+// Output port 1: the simulated CT, vtkImageData on the input's full grid (its extent, origin, spacing and
+//   direction): the input's HU outside the region of interest, inside it the input's HU plus the change the
+//   injection made (k rho_fluid / rho0), taken through physical points from the runner's simulated CT on the
+//   axis-aligned grid (InputGridPaste.h: exact for axial, flipped and axis-swapped CTs, interpolated for
+//   oblique ones). The files the runner writes hold the ROI of the axis-aligned grid only.
 // Parameters: the scene's values by setters (SetScene sets all of them at once, including the viscosity
 // table, integrator and model overrides that have no setter of their own). OutputDirectory non-empty: the
 // runner's files are written there too. Progress: UpdateProgress (ProgressEvent) as simulated time advances;

@@ -5,6 +5,8 @@
 #include <itkIdentityTransform.h>
 
 #include <algorithm>
+#include <array>
+#include <cstddef>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -20,9 +22,84 @@ bool isAxisAligned(const imaging::ImageType* ct) {
   return true;
 }
 
+std::optional<AxisPermutation> axisPermutation(const imaging::ImageType* ct) {
+  const auto& d = ct->GetDirection();
+  AxisPermutation p;
+  std::array<bool, 3> rowUsed{false, false, false};
+  for (unsigned a = 0; a < 3; ++a) { // column a: where voxel axis a points
+    int nonZero = 0;
+    for (unsigned r = 0; r < 3; ++r) {
+      const double v = d[r][a];
+      if (std::abs(v) <= 1e-6) continue;
+      if (std::abs(std::abs(v) - 1.0) > 1e-6 || rowUsed[r]) return std::nullopt;
+      rowUsed[r] = true;
+      p.axis[a] = r;
+      p.sign[a] = v > 0 ? 1 : -1;
+      ++nonZero;
+    }
+    if (nonZero != 1) return std::nullopt;
+  }
+  return p;
+}
+
+namespace {
+
+// The same voxels with their axes permuted and flipped so that the direction is the identity: a copy, no
+// interpolation, so a flipped or axis-swapped series gives the axial series' array exactly.
+imaging::ImageType::Pointer reorient(const imaging::ImageType* ct, const AxisPermutation& p) {
+  const auto region = ct->GetBufferedRegion();
+  if (region != ct->GetLargestPossibleRegion())
+    throw std::invalid_argument("CT: only part of the volume is in memory; load the whole series");
+  const auto inSize = region.GetSize();
+  const auto inStart = region.GetIndex();
+  std::array<unsigned, 3> from{}; // patient axis r is voxel axis from[r] of the CT
+  for (unsigned a = 0; a < 3; ++a) from[p.axis[a]] = a;
+  imaging::ImageType::SizeType size;
+  imaging::ImageType::SpacingType spacing;
+  for (unsigned r = 0; r < 3; ++r) {
+    size[r] = inSize[from[r]];
+    spacing[r] = ct->GetSpacing()[from[r]];
+  }
+  // The new first voxel is the CT's voxel at the low end of every patient axis: its first voxel along an
+  // axis that runs forwards, its last along one that runs backwards.
+  imaging::ImageType::IndexType first;
+  for (unsigned a = 0; a < 3; ++a)
+    first[a] = inStart[a] + (p.sign[a] > 0 ? 0 : itk::IndexValueType(inSize[a]) - 1);
+  imaging::ImageType::PointType origin;
+  ct->TransformIndexToPhysicalPoint(first, origin);
+  auto out = imaging::ImageType::New();
+  imaging::ImageType::RegionType outRegion;
+  outRegion.SetSize(size);
+  out->SetRegions(outRegion);
+  out->SetSpacing(spacing);
+  out->SetOrigin(origin); // direction: the identity (New()'s)
+  out->Allocate();
+  // Buffer strides of the CT's axes, and where output index 0 lies along each.
+  const std::array<std::ptrdiff_t, 3> stride{1, std::ptrdiff_t(inSize[0]), std::ptrdiff_t(inSize[0] * inSize[1])};
+  std::array<std::ptrdiff_t, 3> step{}; // buffer step per output index along patient axis r
+  std::ptrdiff_t base = 0;
+  for (unsigned a = 0; a < 3; ++a) {
+    step[p.axis[a]] = p.sign[a] * stride[a];
+    if (p.sign[a] < 0) base += std::ptrdiff_t(inSize[a] - 1) * stride[a];
+  }
+  const float* in = ct->GetBufferPointer();
+  float* o = out->GetBufferPointer();
+  for (std::ptrdiff_t k = 0; k < std::ptrdiff_t(size[2]); ++k)
+    for (std::ptrdiff_t j = 0; j < std::ptrdiff_t(size[1]); ++j) {
+      std::ptrdiff_t src = base + k * step[2] + j * step[1];
+      for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(size[0]); ++i, src += step[0]) *o++ = in[src];
+    }
+  return out;
+}
+
+} // namespace
+
 imaging::ImageType::ConstPointer axisAligned(const imaging::ImageType* ct) {
   if (!ct) throw std::invalid_argument("CT: no image");
   if (isAxisAligned(ct)) return ct;
+  // Flipped or swapped axes: the voxels already lie on an axis-aligned grid, so resampling would only blur
+  // them (trilinear, and onto the smallest spacing).
+  if (const auto permutation = axisPermutation(ct)) return imaging::ImageType::ConstPointer(reorient(ct, *permutation));
   const auto& d = ct->GetDirection();
   for (unsigned a = 0; a < 3; ++a)
     for (unsigned b = 0; b < 3; ++b) {

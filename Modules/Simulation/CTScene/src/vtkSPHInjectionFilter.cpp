@@ -2,6 +2,7 @@
 
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/scene/InjectionRunner.h"
+#include "cementsph/scene/InputGridPaste.h"
 
 #include <vtkCommand.h>
 #include <vtkDataObject.h>
@@ -152,25 +153,11 @@ int vtkSPHInjectionFilter::RequestData(vtkInformationVector** inputVector, vtkIn
     const auto r = cementsph::scene::runInjection(ct, this->GetScene(), o);
     this->MetricsJSON = r.metrics.dump(2);
     particles->ShallowCopy(r.particles);
-    // The whole input grid: the input's HU with the ROI of the simulated CT pasted in.
-    const auto full = cementsph::imaging::ImageType::New();
-    full->SetRegions(ct->GetLargestPossibleRegion());
-    full->CopyInformation(ct);
-    full->Allocate();
-    const std::size_t n = ct->GetLargestPossibleRegion().GetNumberOfPixels();
-    std::copy(ct->GetBufferPointer(), ct->GetBufferPointer() + n, full->GetBufferPointer());
-    const auto start = ct->GetLargestPossibleRegion().GetIndex();
-    const auto roi = r.simulatedCt->GetLargestPossibleRegion().GetSize();
-    const auto& roiStart = r.metrics["roi_start_index"];
-    for (itk::IndexValueType k = 0; k < itk::IndexValueType(roi[2]); ++k)
-      for (itk::IndexValueType j = 0; j < itk::IndexValueType(roi[1]); ++j)
-        for (itk::IndexValueType i = 0; i < itk::IndexValueType(roi[0]); ++i) {
-          cementsph::imaging::ImageType::IndexType dst;
-          dst[0] = start[0] + roiStart[0].get<long>() + i;
-          dst[1] = start[1] + roiStart[1].get<long>() + j;
-          dst[2] = start[2] + roiStart[2].get<long>() + k;
-          full->SetPixel(dst, r.simulatedCt->GetPixel({{i, j, k}}));
-        }
+    // The whole input grid: the input's HU with the simulated region of interest pasted in. The runner's
+    // simulated CT lies on the AXIS-ALIGNED CT's grid (a reorientation or resampling when the input's
+    // direction is not the identity), so it goes back through physical points, not through its indices.
+    const auto background = cementsph::scene::alignedBackgroundOn(ct, r.simulatedCt);
+    const auto full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
     vtkSmartPointer<vtkImageData> image = cementsph::imaging::toVtk(full);
     simulated->ShallowCopy(image);
     // Keep the input's extent labelling (same size).

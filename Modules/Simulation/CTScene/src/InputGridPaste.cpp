@@ -1,0 +1,176 @@
+#include "cementsph/scene/InputGridPaste.h"
+
+#include "cementsph/imaging/AffineRegistration.h"
+#include "cementsph/scene/AxisAlignedCT.h"
+
+#include <itkIdentityTransform.h>
+#include <itkImageRegionIteratorWithIndex.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cementsph::scene {
+
+namespace {
+
+void requireWhole(const imaging::ImageType* image, const char* what) {
+  if (!image) throw std::invalid_argument(std::string("paste-back: no ") + what + " image");
+  if (image->GetBufferedRegion() != image->GetLargestPossibleRegion())
+    throw std::invalid_argument(std::string("paste-back: the ") + what + " image is only partly in memory");
+}
+
+} // namespace
+
+imaging::ImageType::Pointer alignedBackgroundOn(const imaging::ImageType* input, const imaging::ImageType* grid) {
+  requireWhole(input, "input CT");
+  if (!grid) throw std::invalid_argument("paste-back: no grid to sample the CT on");
+  if (!isAxisAligned(grid)) throw std::invalid_argument("paste-back: the simulated CT's grid is not axis-aligned");
+  if (!isAxisAligned(input) && !axisPermutation(input)) {
+    // Oblique: the same trilinear sampling axisAligned() did, at these voxel centres only.
+    auto identity = itk::IdentityTransform<double, 3>::New();
+    return imaging::resampleOnto(input, grid, identity, kOutsideScanHu);
+  }
+  // Axial or reoriented: every centre of the aligned grid is an input voxel centre, so the input's voxel
+  // (TransformPhysicalPointToIndex rounds to the nearest) is the value itself.
+  auto out = imaging::ImageType::New();
+  out->SetRegions(grid->GetLargestPossibleRegion());
+  out->CopyInformation(grid);
+  out->Allocate();
+  itk::ImageRegionIteratorWithIndex<imaging::ImageType> it(out, out->GetLargestPossibleRegion());
+  for (; !it.IsAtEnd(); ++it) {
+    imaging::ImageType::PointType p;
+    out->TransformIndexToPhysicalPoint(it.GetIndex(), p);
+    imaging::ImageType::IndexType index;
+    it.Set(input->TransformPhysicalPointToIndex(p, index) ? input->GetPixel(index) : kOutsideScanHu);
+  }
+  return out;
+}
+
+imaging::ImageType::Pointer pasteOntoInputGrid(const imaging::ImageType* input, const imaging::ImageType* simulated,
+                                               const imaging::ImageType* background) {
+  requireWhole(input, "input CT");
+  requireWhole(simulated, "simulated CT");
+  requireWhole(background, "background");
+  if (!isAxisAligned(simulated)) throw std::invalid_argument("paste-back: the simulated CT's grid is not axis-aligned");
+  const auto simRegion = simulated->GetLargestPossibleRegion();
+  bool sameGrid = background->GetLargestPossibleRegion() == simRegion && isAxisAligned(background);
+  for (unsigned a = 0; a < 3 && sameGrid; ++a) {
+    const double h = simulated->GetSpacing()[a];
+    sameGrid = std::abs(background->GetSpacing()[a] - h) <= 1e-9 * h &&
+               std::abs(background->GetOrigin()[a] - simulated->GetOrigin()[a]) <= 1e-6 * h;
+  }
+  if (!sameGrid) throw std::invalid_argument("paste-back: the background is not on the simulated CT's grid");
+
+  auto out = imaging::ImageType::New();
+  out->SetRegions(input->GetLargestPossibleRegion());
+  out->CopyInformation(input);
+  out->Allocate();
+  const auto inRegion = input->GetLargestPossibleRegion();
+  const std::size_t inCount = inRegion.GetNumberOfPixels();
+  std::copy(input->GetBufferPointer(), input->GetBufferPointer() + inCount, out->GetBufferPointer());
+
+  std::array<long, 3> n{};
+  std::array<double, 3> o{}, h{}; // simulated voxel (region-relative) u lies at o + h u
+  for (unsigned a = 0; a < 3; ++a) {
+    n[a] = long(simRegion.GetSize()[a]);
+    h[a] = simulated->GetSpacing()[a];
+    o[a] = simulated->GetOrigin()[a] + h[a] * double(simRegion.GetIndex()[a]);
+  }
+  if (n[0] == 0 || n[1] == 0 || n[2] == 0) return out;
+  const float* sim = simulated->GetBufferPointer();
+  const float* bg = background->GetBufferPointer();
+  const float* in = input->GetBufferPointer();
+  float* dst = out->GetBufferPointer();
+  auto simOffset = [&](long i, long j, long k) { return std::size_t(i + n[0] * (j + n[1] * k)); };
+  const std::size_t simCount = std::size_t(n[0] * n[1] * n[2]);
+
+  // The input indices the simulated box can reach: its 8 corners mapped into the input's index space,
+  // widened to whole voxels and clipped to the input's region (so no index below can leave the buffer).
+  std::array<double, 3> cLo, cHi;
+  cLo.fill(std::numeric_limits<double>::infinity());
+  cHi.fill(-std::numeric_limits<double>::infinity());
+  for (int corner = 0; corner < 8; ++corner) {
+    imaging::ImageType::PointType p;
+    for (unsigned a = 0; a < 3; ++a) p[a] = o[a] + h[a] * (((corner >> a) & 1) ? double(n[a]) - 0.5 : -0.5);
+    itk::ContinuousIndex<double, 3> c;
+    input->TransformPhysicalPointToContinuousIndex(p, c);
+    for (unsigned a = 0; a < 3; ++a) {
+      cLo[a] = std::min(cLo[a], c[a]);
+      cHi[a] = std::max(cHi[a], c[a]);
+    }
+  }
+  std::array<long, 3> lo{}, hi{}, inStart{}, inSize{};
+  for (unsigned a = 0; a < 3; ++a) {
+    inStart[a] = long(inRegion.GetIndex()[a]);
+    inSize[a] = long(inRegion.GetSize()[a]);
+    lo[a] = std::max(inStart[a], long(std::floor(cLo[a])));
+    hi[a] = std::min(inStart[a] + inSize[a] - 1, long(std::ceil(cHi[a])));
+    if (lo[a] > hi[a]) return out; // the simulated box misses the input
+  }
+
+  imaging::ImageType::IndexType index;
+  for (index[2] = lo[2]; index[2] <= hi[2]; ++index[2])
+    for (index[1] = lo[1]; index[1] <= hi[1]; ++index[1])
+      for (index[0] = lo[0]; index[0] <= hi[0]; ++index[0]) {
+        imaging::ImageType::PointType p;
+        input->TransformIndexToPhysicalPoint(index, p);
+        std::array<double, 3> u{};
+        bool inside = true;
+        for (unsigned a = 0; a < 3 && inside; ++a) {
+          u[a] = (p[a] - o[a]) / h[a];
+          inside = u[a] >= -0.5 && u[a] <= double(n[a]) - 0.5;
+        }
+        if (!inside) continue;
+        const std::size_t target = std::size_t((index[0] - inStart[0]) +
+                                               inSize[0] * ((index[1] - inStart[1]) + inSize[1] * (index[2] - inStart[2])));
+        if (target >= inCount) continue; // cannot happen (lo/hi are clipped); never write outside the buffer
+        const double inHu = in[target];
+        std::array<long, 3> near{};
+        bool onCentre = true;
+        for (unsigned a = 0; a < 3; ++a) {
+          near[a] = std::clamp(std::lround(u[a]), 0L, n[a] - 1);
+          onCentre = onCentre && std::abs(u[a] - double(near[a])) <= 1e-6;
+        }
+        if (onCentre) {
+          // The same voxel: simulated + (input - background), which is the simulated HU itself wherever the
+          // input equals the background (axial and reoriented CTs), with no round-off of a difference.
+          const std::size_t v = simOffset(near[0], near[1], near[2]);
+          if (v >= simCount) continue;
+          dst[target] = float(double(sim[v]) + (inHu - double(bg[v])));
+          continue;
+        }
+        // Oblique: the change, trilinear between the simulated voxel centres (clamped at the box's edge,
+        // where the nearest centres are all there is).
+        std::array<long, 3> i0{};
+        std::array<double, 3> f{};
+        for (unsigned a = 0; a < 3; ++a) {
+          const double uc = std::clamp(u[a], 0.0, double(n[a] - 1));
+          i0[a] = std::min(long(std::floor(uc)), std::max(0L, n[a] - 2));
+          f[a] = n[a] > 1 ? uc - double(i0[a]) : 0.0;
+        }
+        double change = 0;
+        for (int c = 0; c < 8; ++c) {
+          double w = 1;
+          std::array<long, 3> q{};
+          for (unsigned a = 0; a < 3; ++a) {
+            const bool up = (c >> a) & 1;
+            w *= up ? f[a] : 1.0 - f[a];
+            q[a] = std::min(i0[a] + (up ? 1 : 0), n[a] - 1);
+          }
+          if (w == 0.0) continue;
+          const std::size_t v = simOffset(q[0], q[1], q[2]);
+          if (v >= simCount) continue;
+          change += w * (double(sim[v]) - double(bg[v]));
+        }
+        dst[target] = float(inHu + change);
+      }
+  return out;
+}
+
+} // namespace cementsph::scene
