@@ -10,6 +10,13 @@
 // the body; a basivertebral foramen, a 3 mm opening in the body's posterior wall at mid height, the leak path
 // into the canal; soft tissue (soft_tissue_hu) around. Partial volume: each voxel is the mean of 3^3 sub-samples.
 // Gaussian noise (noise_hu, seeded), HU rounded.
+//
+// The anatomy variant (issue 20, item 7; every option off by default, so the default phantom is unchanged voxel
+// for voxel): marrow fat below the bone band inside the body (a sphere, fully enclosed by trabecular bone), disc
+// spaces above and below the body (disc_hu between the body's end plates and those of neighbouring vertebral
+// bodies, which continue to the field's edge; no posterior elements), and a basivertebral vein (a tube of
+// blood HU from inside the body out through its posterolateral wall into the soft tissue). The known geometry
+// is in VertebraResult (and its toJson), the oracle of the anatomy tests.
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"
@@ -29,6 +36,12 @@ struct VertebraOptions {
   double foramenDiameterMm = 3.0;              // 0: an intact posterior wall
   double noiseHu = 10.0;
   std::uint64_t seed = 1;
+  // The anatomy variant (0 = off). Fat: a sphere centred 7 mm left, 3 mm anterior, 2 mm superior of the body's
+  // centre (radius up to 6 mm keeps it 3 mm inside the trabecular bone). Discs: height of each disc space.
+  // Vein: a tube of this radius along the segment veinStartMm -> veinEndMm of the result.
+  double marrowFatRadiusMm = 0.0, marrowFatHu = -30.0;
+  double discHeightMm = 0.0, discHu = 80.0;
+  double veinRadiusMm = 0.0, veinHu = 60.0;
   void validate() const; // std::invalid_argument naming the option
 };
 
@@ -36,7 +49,17 @@ struct VertebraResult {
   imaging::ImageType::Pointer ct;
   std::array<double, 3> bodyCentreMm{}, canalCentreMm{}, foramenMm{};
   std::array<double, 3> suggestedTipMm{}, suggestedDirection{}; // a transpedicular plan: tip in the body
-  nlohmann::json toJson() const;
+  // The body: an elliptic cylinder about bodyCentreMm with these semi-axes (x, y) and half height (z).
+  std::array<double, 3> bodySemiAxesMm{};
+  // The variant's geometry (radius / height 0 where the option is off). Discs: the body's elliptic section,
+  // z in [lower[0], lower[1]] and [upper[0], upper[1]].
+  std::array<double, 3> marrowFatCentreMm{};
+  double marrowFatRadiusMm = 0.0;
+  std::array<double, 2> lowerDiscZMm{}, upperDiscZMm{};
+  double discHeightMm = 0.0;
+  std::array<double, 3> veinStartMm{}, veinEndMm{};
+  double veinRadiusMm = 0.0;
+  nlohmann::json toJson() const; // the variant's keys only where the variant is on
 };
 
 VertebraResult makeVertebra(const VertebraOptions& options);

@@ -1,0 +1,387 @@
+// The anatomy module (issue 20, items 1 and 7) on the vertebra phantom's anatomy variant: marrow fat inside the
+// body, discs above and below, a basivertebral vein. The oracle is the variant's analytic geometry, written out
+// here from the phantom's documented layout (VertebraPhantom.h: the body's centre at (field_x / 2, 15 + 6,
+// field_z / 2), semi-axes 20 x 15 mm, half height 12.5 mm; fat 7 mm left, 3 mm anterior, 2 mm superior of it;
+// the vein from centre + (-4, 2, -5) to centre + (-22, 20, -5); the canal (radius 8 mm) 23 mm behind the centre,
+// 10 mm either side of it in height), never from the anatomy code. Partial volume: a voxel counts as "inside" a
+// shape when its whole box is (the phantom averages 3^3 sub-samples per voxel), so the boundary shell of one voxel
+// is left out where the test says so.
+#include "cementsph/anatomy/LeakSites.h"
+#include "cementsph/anatomy/VertebraAnatomy.h"
+#include "cementsph/phantom/VertebraPhantom.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace {
+using namespace cementsph;
+using anatomy::TissueClass;
+using P = std::array<double, 3>;
+
+constexpr double kA = 20, kB = 15, kH = 12.5, kCanalR = 8, kFatR = 5, kDiscH = 10, kVeinR = 2;
+
+phantom::VertebraOptions variantOptions() {
+  phantom::VertebraOptions o;
+  o.fieldMm = {64, 70, 57}; // room for both discs (10 mm) and the neighbours' end plates
+  o.marrowFatRadiusMm = kFatR;
+  o.marrowFatHu = -30;
+  o.discHeightMm = kDiscH;
+  o.discHu = 80;
+  o.veinRadiusMm = kVeinR;
+  o.veinHu = 60;
+  return o;
+}
+
+// The analytic geometry of the variant (see the header comment).
+struct Truth {
+  P c, fat, veinA, veinB, canal;
+  double upper[2], lower[2];
+  explicit Truth(const phantom::VertebraOptions& o) {
+    c = {o.fieldMm[0] / 2, kB + 6, o.fieldMm[2] / 2};
+    fat = {c[0] + 7, c[1] - 3, c[2] + 2};
+    veinA = {c[0] - 4, c[1] + 2, c[2] - 5};
+    veinB = {c[0] - 22, c[1] + 20, c[2] - 5};
+    canal = {c[0], c[1] + kB + kCanalR, c[2]};
+    upper[0] = c[2] + kH;
+    upper[1] = c[2] + kH + kDiscH;
+    lower[0] = c[2] - kH - kDiscH;
+    lower[1] = c[2] - kH;
+  }
+  double radial(const P& p) const { return std::hypot((p[0] - c[0]) / kA, (p[1] - c[1]) / kB); }
+  double veinDistance(const P& p) const {
+    P u, q;
+    double uu = 0, t = 0;
+    for (int a = 0; a < 3; ++a) {
+      u[a] = veinB[a] - veinA[a];
+      q[a] = p[a] - veinA[a];
+      uu += u[a] * u[a];
+      t += q[a] * u[a];
+    }
+    t = std::clamp(t / uu, 0.0, 1.0);
+    double d = 0;
+    for (int a = 0; a < 3; ++a) d += (q[a] - t * u[a]) * (q[a] - t * u[a]);
+    return std::sqrt(d);
+  }
+};
+
+struct Scene {
+  phantom::VertebraOptions options = variantOptions();
+  phantom::VertebraResult phantom;
+  anatomy::Grid grid;
+  std::vector<float> hu;
+  std::unique_ptr<Truth> truth;
+  anatomy::AnatomyOptions ao; // soft_tissue_max_hu 40, cortical_hu 350: BoneCalibration's defaults
+  Scene() {
+    phantom = phantom::makeVertebra(options);
+    truth = std::make_unique<Truth>(options);
+    const auto size = phantom.ct->GetLargestPossibleRegion().GetSize();
+    for (int a = 0; a < 3; ++a) {
+      grid.size[a] = int(size[a]);
+      grid.spacingMm[a] = phantom.ct->GetSpacing()[a];
+      grid.originMm[a] = phantom.ct->GetOrigin()[a];
+    }
+    hu.assign(phantom.ct->GetBufferPointer(), phantom.ct->GetBufferPointer() + grid.count());
+  }
+  P centre(int i, int j, int k) const { return grid.centreMm(i, j, k); }
+  // Visit every voxel with its centre and the 8 corners of its box.
+  void forEach(const std::function<void(std::size_t, const P&, const std::array<P, 8>&)>& f) const {
+    std::size_t n = 0;
+    for (int k = 0; k < grid.size[2]; ++k)
+      for (int j = 0; j < grid.size[1]; ++j)
+        for (int i = 0; i < grid.size[0]; ++i, ++n) {
+          const P p = centre(i, j, k);
+          std::array<P, 8> corners;
+          for (int q = 0; q < 8; ++q)
+            for (int a = 0; a < 3; ++a) corners[q][a] = p[a] + ((q >> a) & 1 ? 0.5 : -0.5) * grid.spacingMm[a];
+          f(n, p, corners);
+        }
+  }
+};
+
+const Scene& scene() {
+  static const Scene s;
+  return s;
+}
+const anatomy::Anatomy& ctAnatomy() {
+  static const anatomy::Anatomy a =
+      anatomy::classifyAnatomyFromCT(scene().hu.data(), scene().grid, scene().truth->c, scene().ao);
+  return a;
+}
+
+bool allCorners(const std::array<P, 8>& cs, const std::function<bool(const P&)>& in) {
+  for (const auto& c : cs)
+    if (!in(c)) return false;
+  return true;
+}
+
+// The voxels wholly inside a region, and how many of them carry the expected class.
+struct Count {
+  std::size_t inside = 0, right = 0;
+  double share() const { return inside ? double(right) / double(inside) : 0.0; }
+};
+Count count(const anatomy::Anatomy& a, const std::function<bool(const P&)>& in, TissueClass expected) {
+  Count c;
+  scene().forEach([&](std::size_t n, const P&, const std::array<P, 8>& cs) {
+    if (!allCorners(cs, in)) return;
+    ++c.inside;
+    if (a.at(n) == expected) ++c.right;
+  });
+  return c;
+}
+} // namespace
+
+// The variant's geometry as the phantom reports it is the layout written out above (the oracle is the layout).
+TEST(VertebraAnatomy, TheVariantReportsItsDocumentedGeometry) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(s.phantom.bodyCentreMm[a], t.c[a], 1e-12);
+    EXPECT_NEAR(s.phantom.marrowFatCentreMm[a], t.fat[a], 1e-12);
+    EXPECT_NEAR(s.phantom.veinStartMm[a], t.veinA[a], 1e-12);
+    EXPECT_NEAR(s.phantom.veinEndMm[a], t.veinB[a], 1e-12);
+  }
+  EXPECT_NEAR(s.phantom.upperDiscZMm[0], t.upper[0], 1e-12);
+  EXPECT_NEAR(s.phantom.lowerDiscZMm[1], t.lower[1], 1e-12);
+  const auto j = s.phantom.toJson();
+  EXPECT_TRUE(j.contains("marrow_fat") && j.contains("discs") && j.contains("vein"));
+  // The fat is below the bone band (its centre voxel: -30 HU +- 5 sigma of the 10 HU noise).
+  const auto ci = s.grid.continuousIndex(t.fat);
+  const std::size_t n = std::size_t(std::lround(ci[0])) +
+                        std::size_t(s.grid.size[0]) * (std::size_t(std::lround(ci[1])) + std::size_t(s.grid.size[1]) * std::size_t(std::lround(ci[2])));
+  EXPECT_LT(s.hu[n], 40.0f);
+  EXPECT_NEAR(s.hu[n], -30.0, 50.0);
+}
+
+// The default phantom has none of the variant's keys (its truth.json is unchanged).
+TEST(VertebraAnatomy, TheDefaultPhantomHasNoVariantKeys) {
+  const auto j = phantom::VertebraResult{}.toJson();
+  EXPECT_FALSE(j.contains("marrow_fat") || j.contains("discs") || j.contains("vein"));
+}
+
+// (a) Marrow fat enclosed by trabecular bone is the target vertebra: every voxel that touches the fat sphere
+// (its box within 5 mm of the centre), exactly none left out.
+TEST(VertebraAnatomy, MarrowFatInsideTheBodyIsTheTargetNotALeak) {
+  const auto& s = scene();
+  const auto& a = ctAnatomy();
+  EXPECT_EQ(a.rule, "ct-bone-rule");
+  EXPECT_TRUE(a.targetFound) << a.description;
+  std::size_t touching = 0, wrong = 0;
+  s.forEach([&](std::size_t n, const P& p, const std::array<P, 8>&) {
+    double d2 = 0; // distance from the fat's centre to the voxel's box
+    for (int q = 0; q < 3; ++q) {
+      const double h = 0.5 * s.grid.spacingMm[q], e = std::max(0.0, std::abs(p[q] - s.truth->fat[q]) - h);
+      d2 += e * e;
+    }
+    if (std::sqrt(d2) > kFatR) return;
+    ++touching;
+    if (a.at(n) != TissueClass::TargetVertebra) ++wrong;
+  });
+  EXPECT_GT(touching, 300u); // 4/3 pi 5^3 / 1.5 mm^3 = 349 voxels wholly inside, more touching
+  EXPECT_EQ(wrong, 0u);
+}
+
+// (b) The disc spaces are disc: >= 95 % of the voxels wholly inside each analytic disc (the body's elliptic
+// section between the end plates; the shell of partial volume against the end plates and the edge left out).
+TEST(VertebraAnatomy, TheDiscSpacesAreDisc) {
+  const auto& t = *scene().truth;
+  for (const double* z : {t.upper, t.lower}) {
+    const Count c = count(ctAnatomy(), [&](const P& p) { return t.radial(p) <= 1 && p[2] >= z[0] && p[2] <= z[1]; },
+                          TissueClass::Disc);
+    EXPECT_GT(c.inside, 1500u); // pi 20 15 (10 - 1.5) / 1.5 mm^3 = 5340 voxels less the edge
+    EXPECT_GE(c.share(), 0.95) << c.right << " of " << c.inside << " at z " << z[0];
+  }
+}
+
+// (c) The canal (radius 8 mm, 10 mm either side of the body's mid height) is canal: >= 95 % of the voxels
+// wholly inside it and wholly behind the body's ellipse.
+TEST(VertebraAnatomy, TheCanalIsCanal) {
+  const auto& t = *scene().truth;
+  const Count c = count(ctAnatomy(),
+                        [&](const P& p) {
+                          return std::hypot(p[0] - t.canal[0], p[1] - t.canal[1]) <= kCanalR &&
+                                 std::abs(p[2] - t.c[2]) <= 0.8 * kH && t.radial(p) > 1;
+                        },
+                        TissueClass::Canal);
+  EXPECT_GT(c.inside, 1500u); // pi 8^2 x 20 / 1.5 mm^3 = 2680 voxels less the shell
+  EXPECT_GE(c.share(), 0.95) << c.right << " of " << c.inside;
+}
+
+// (d) The vein outside the body is vessel: >= 95 % of the voxels whose box lies within the tube (to 0.25 mm of
+// partial volume) and 2 mm clear of the body's wall (the wall's partial-volume rim is the vertebra's). A voxel
+// of 60 HU falls below the 40 HU band with the 10 HU noise 2.3 % of the time; the rule fills such holes.
+TEST(VertebraAnatomy, TheVeinOutsideTheBodyIsVessel) {
+  const auto& t = *scene().truth;
+  const Count c = count(ctAnatomy(),
+                        [&](const P& p) { return t.veinDistance(p) <= kVeinR + 0.25 && t.radial(p) >= 1 + 2.0 / kB; },
+                        TissueClass::Vessel);
+  EXPECT_GT(c.inside, 10u);
+  EXPECT_GE(c.share(), 0.95) << c.right << " of " << c.inside;
+  std::printf("vein outside the body: %zu of %zu voxels vessel\n", c.right, c.inside);
+  // And the vein inside the body (bone-band HU, enclosed by the cortex) is the vertebra's.
+  const Count inside = count(ctAnatomy(), [&](const P& p) { return t.veinDistance(p) <= kVeinR && t.radial(p) <= 0.7; },
+                             TissueClass::TargetVertebra);
+  EXPECT_GT(inside.inside, 5u);
+  EXPECT_EQ(inside.right, inside.inside);
+}
+
+// (e) A tip outside the target's bone is refused with one line naming the tissue; the body's centre and a point
+// in the enclosed marrow fat are accepted.
+TEST(VertebraAnatomy, TipsOutsideBoneAreRefusedByTissue) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  EXPECT_EQ(anatomy::requireTipInVertebra(ctAnatomy(), s.hu.data(), t.c, false), TissueClass::TargetVertebra);
+  EXPECT_EQ(anatomy::requireTipInVertebra(ctAnatomy(), s.hu.data(), t.fat, false), TissueClass::TargetVertebra);
+  // The same rule run from a tip in the fat finds the same vertebra (the tip's own voxel is below the band).
+  const auto fromFat = anatomy::classifyAnatomyFromCT(s.hu.data(), s.grid, t.fat, s.ao);
+  EXPECT_EQ(anatomy::tissueAtTip(fromFat, t.fat), TissueClass::TargetVertebra);
+
+  // A copy of the CT with a fat pocket (-100 HU) and an air pocket (-1000 HU), 6 mm cubes, lateral to the body.
+  std::vector<float> hu = s.hu;
+  const P fatOut{t.c[0] + 26, t.c[1], t.c[2]}, airOut{t.c[0] - 26, t.c[1], t.c[2]};
+  s.forEach([&](std::size_t n, const P& p, const std::array<P, 8>&) {
+    auto near = [&](const P& q) { return std::abs(p[0] - q[0]) <= 3 && std::abs(p[1] - q[1]) <= 3 && std::abs(p[2] - q[2]) <= 3; };
+    if (near(fatOut)) hu[n] = -100;
+    if (near(airOut)) hu[n] = -1000;
+  });
+  struct Case {
+    P tip;
+    TissueClass expected;
+    const char* words;
+  };
+  const P discTip{t.c[0], t.c[1], 0.5 * (t.upper[0] + t.upper[1])};
+  for (const Case& k : {Case{discTip, TissueClass::Disc, "intervertebral disc"},
+                        Case{t.canal, TissueClass::Canal, "spinal canal"},
+                        Case{fatOut, TissueClass::OtherSoftTissue, "soft tissue"},
+                        Case{airOut, TissueClass::Air, "air"}}) {
+    const auto a = anatomy::classifyAnatomyFromCT(hu.data(), s.grid, k.tip, s.ao);
+    EXPECT_TRUE(a.targetFound) << a.description; // every tip is within 20 mm of the body's core
+    EXPECT_EQ(anatomy::tissueAtTip(a, k.tip), k.expected) << k.words;
+    try {
+      anatomy::requireTipInVertebra(a, hu.data(), k.tip, false);
+      ADD_FAILURE() << "a tip in " << k.words << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(k.words), std::string::npos) << m;
+      EXPECT_NE(m.find("allow_tip_outside_bone"), std::string::npos) << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    }
+    EXPECT_EQ(anatomy::requireTipInVertebra(a, hu.data(), k.tip, true), k.expected); // deliberate: allowed
+  }
+}
+
+namespace {
+// A ball of cement: per voxel the share of its box inside the ball (5^3 sub-samples), fill 1 there; arrival at
+// 10 s + 1 s per mm from the centre.
+void ball(const P& centre, double radius, std::vector<double>& fill, std::vector<double>& arrival) {
+  const auto& s = scene();
+  fill.assign(s.grid.count(), 0.0);
+  arrival.assign(s.grid.count(), -1.0);
+  s.forEach([&](std::size_t n, const P& p, const std::array<P, 8>&) {
+    const double d = std::hypot(p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]);
+    if (d > radius + 2) return;
+    int in = 0;
+    for (int c = 0; c < 5; ++c)
+      for (int b = 0; b < 5; ++b)
+        for (int a = 0; a < 5; ++a) {
+          const double x = p[0] + ((a + 0.5) / 5 - 0.5) * s.grid.spacingMm[0], y = p[1] + ((b + 0.5) / 5 - 0.5) * s.grid.spacingMm[1],
+                       z = p[2] + ((c + 0.5) / 5 - 0.5) * s.grid.spacingMm[2];
+          if (std::hypot(x - centre[0], y - centre[1], z - centre[2]) <= radius) ++in;
+        }
+    fill[n] = in / 125.0;
+    if (in > 0) arrival[n] = 10.0 + d;
+  });
+}
+} // namespace
+
+// (f) A 3 mm ball of cement in the upper disc is one disc site of the ball's volume (4/3 pi 3^3 = 0.1131 ml,
+// within 5 %), at the ball's centre (within 0.5 mm), first reached at 10 s (+ the nearest voxel's distance,
+// under 1 mm); a 7 mm ball about the marrow fat leaks nothing and is held inside (its volume within 5 %).
+TEST(VertebraAnatomy, LeakSitesByClassWithTheirVolume) {
+  const auto& t = *scene().truth;
+  const double pi = std::acos(-1.0);
+  std::vector<double> fill, arrival;
+  const P inDisc{t.c[0], t.c[1], 0.5 * (t.upper[0] + t.upper[1])};
+  ball(inDisc, 3.0, fill, arrival);
+  const auto r = anatomy::classifyLeaks(ctAnatomy(), fill, arrival, {});
+  const double v = 4.0 / 3.0 * pi * 27 / 1000;
+  ASSERT_EQ(r.sites.size(), 1u) << r.toJson().dump();
+  EXPECT_EQ(r.sites[0].kind, "disc");
+  EXPECT_NEAR(r.sites[0].volumeMl, v, 0.05 * v);
+  EXPECT_NEAR(r.volumeMlByKind.at("disc"), v, 0.05 * v);
+  EXPECT_NEAR(r.leakedMl, v, 0.05 * v);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(r.sites[0].positionMm[a], inDisc[a], 0.5);
+  EXPECT_GE(r.sites[0].firstTimeS, 10.0);
+  EXPECT_LT(r.sites[0].firstTimeS, 11.0);
+  EXPECT_TRUE(r.toJson().at("sites")[0].contains("first_time_s"));
+
+  ball(t.fat, 7.0, fill, arrival);
+  const auto inside = anatomy::classifyLeaks(ctAnatomy(), fill, arrival, {});
+  const double w = 4.0 / 3.0 * pi * 343 / 1000;
+  EXPECT_EQ(inside.leakedMl, 0.0) << inside.toJson().dump();
+  EXPECT_TRUE(inside.sites.empty());
+  EXPECT_NEAR(inside.insideMl, w, 0.05 * w);
+
+  // Porosity scales the cement a voxel holds: half porosity, half the volume (exactly, in floating point).
+  ball(inDisc, 3.0, fill, arrival);
+  const auto half = anatomy::classifyLeaks(ctAnatomy(), fill, arrival, std::vector<double>(fill.size(), 0.5));
+  EXPECT_NEAR(half.leakedMl, 0.5 * r.leakedMl, 1e-12);
+  EXPECT_THROW(anatomy::classifyLeaks(ctAnatomy(), std::vector<double>(3, 0.0), {}, {}), std::invalid_argument);
+}
+
+// (g) With a label map made from the analytic geometry, every labelled voxel carries its label's class (exact),
+// and the tip rules follow the labels.
+TEST(VertebraAnatomy, LabelMapGivesTheSameClasses) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  // Labels in TotalSegmentator's numbering: L1 (31) the body with its fat and vein, L2 (30) and T12 (32) the
+  // neighbours, 79 the cord (canal), 63 the vena cava for the vein outside; discs by a table key.
+  std::vector<std::int32_t> labels(s.grid.count(), 0);
+  s.forEach([&](std::size_t n, const P& p, const std::array<P, 8>&) {
+    const double dz = p[2] - t.c[2];
+    if (t.radial(p) <= 1 && std::abs(dz) <= kH) labels[n] = 31;
+    else if (t.veinDistance(p) <= kVeinR) labels[n] = 63;
+    else if (t.radial(p) <= 1 && dz > kH && dz <= kH + kDiscH) labels[n] = 200;
+    else if (t.radial(p) <= 1 && dz < -kH && dz >= -kH - kDiscH) labels[n] = 201;
+    else if (t.radial(p) <= 1 && dz > kH + kDiscH) labels[n] = 32;
+    else if (t.radial(p) <= 1 && dz < -kH - kDiscH) labels[n] = 30;
+    else if (std::hypot(p[0] - t.canal[0], p[1] - t.canal[1]) <= kCanalR && std::abs(dz) <= 0.8 * kH) labels[n] = 79;
+  });
+  anatomy::LabelTable table = anatomy::LabelTable::totalSegmentator();
+  const auto extra = anatomy::LabelTable::fromJson(nlohmann::json{{"disc", {200, 201}}});
+  table.classes.insert(extra.classes.begin(), extra.classes.end());
+  const auto a = anatomy::classifyAnatomyFromLabels(s.hu.data(), labels.data(), s.grid, t.c, table, s.ao);
+  EXPECT_EQ(a.rule, "labels");
+  std::size_t wrong = 0;
+  for (std::size_t n = 0; n < labels.size(); ++n) {
+    const int l = labels[n];
+    const TissueClass expected = l == 31                 ? TissueClass::TargetVertebra
+                                 : l == 30 || l == 32    ? TissueClass::OtherBone
+                                 : l == 63               ? TissueClass::Vessel
+                                 : l == 200 || l == 201  ? TissueClass::Disc
+                                 : l == 79               ? TissueClass::Canal
+                                                         : TissueClass::OtherSoftTissue; // no air in the phantom
+    if (a.at(n) != expected) ++wrong;
+  }
+  EXPECT_EQ(wrong, 0u);
+  // The tip in the fat is in L1 (accepted); in the disc the nearest vertebra is the target and the tip refused.
+  EXPECT_EQ(anatomy::requireTipInVertebra(a, s.hu.data(), t.fat, false), TissueClass::TargetVertebra);
+  const P discTip{t.c[0], t.c[1], 0.5 * (t.upper[0] + t.upper[1])};
+  const auto b = anatomy::classifyAnatomyFromLabels(s.hu.data(), labels.data(), s.grid, discTip, table, s.ao);
+  EXPECT_TRUE(b.targetFound);
+  EXPECT_THROW(anatomy::requireTipInVertebra(b, s.hu.data(), discTip, false), std::invalid_argument);
+  // The same disc ball as above: one disc site under the labels too.
+  std::vector<double> fill, arrival;
+  ball(discTip, 3.0, fill, arrival);
+  const auto r = anatomy::classifyLeaks(a, fill, arrival, {});
+  ASSERT_EQ(r.sites.size(), 1u);
+  EXPECT_EQ(r.sites[0].kind, "disc");
+  EXPECT_EQ(r.rule, "labels");
+  EXPECT_THROW(anatomy::LabelTable::fromJson(nlohmann::json{{"discs", {1}}}), std::invalid_argument);
+}
