@@ -27,11 +27,29 @@ void requirePositive(double v, const char* option) {
   if (!(std::isfinite(v) && v > 0)) throw std::invalid_argument(std::string(option) + " must be positive");
 }
 
+// A value option given: finite and >= 0 (0 is "not given"). NaN would otherwise count as "not given".
+void requireFiniteOrUnset(double v, const char* option) {
+  if (!(std::isfinite(v) && v >= 0))
+    throw std::invalid_argument(std::string(option) + " must be a finite number > 0");
+}
+
+// A result must be a finite positive number: options each within range can still overflow together
+// (a drop of 1e300 MPa over a 1e-300 ml/s flow), and an `inf` printed (or `null` in --json) is no answer.
+void requireFiniteResult(double v, const char* what, const char* options) {
+  if (!(std::isfinite(v) && v > 0))
+    throw std::invalid_argument(std::string(what) + " comes out as " + (std::isnan(v) ? "undefined" : v > 0 ? "infinite" : "not positive") +
+                                " for these options: " + options + " are outside what a cannula and cement can give; check their values and units");
+}
+
 int runViscosity(const ViscosityOptions& o) {
   const double diameterMm = o.gauge.empty() ? o.diameterMm : cementsph::sph::cannulaInnerDiameterMm(o.gauge);
   requirePositive(diameterMm, "--cannula-inner-diameter-mm");
   requirePositive(o.lengthMm, "--cannula-length-mm");
   requirePositive(o.flowRateMlPerS, "--flow-rate-ml-per-s");
+  requireFiniteOrUnset(o.pressureDropMPa, "--pressure-drop-mpa");
+  requireFiniteOrUnset(o.viscosityPaS, "--viscosity-pa-s");
+  requireFiniteOrUnset(o.consistencyPaSn, "--consistency-pa-s-n");
+  requireFiniteOrUnset(o.flowIndex, "--flow-index");
   const bool powerLaw = o.flowIndex != 0 || o.consistencyPaSn != 0;
   if (powerLaw && !(o.flowIndex > 0 && o.flowIndex <= 3))
     throw std::invalid_argument("--flow-index must be in (0, 3] (a power-law cement needs it)");
@@ -58,6 +76,13 @@ int runViscosity(const ViscosityOptions& o) {
     if (!fromPressure) dropPa = cementsph::sph::hagenPoiseuillePressureDrop(mu, L, Q, D);
     j["viscosity_pa_s"] = mu;
   }
+  const char* inputs = fromPressure ? "--pressure-drop-mpa, --flow-rate-ml-per-s and the cannula size"
+                                    : powerLaw ? "--consistency-pa-s-n, --flow-index, --flow-rate-ml-per-s and the cannula size"
+                                               : "--viscosity-pa-s, --flow-rate-ml-per-s and the cannula size";
+  requireFiniteResult(dropPa, "the pressure drop", inputs);
+  requireFiniteResult(j["bore_speed_mm_per_s"].get<double>(), "the bore speed", "--flow-rate-ml-per-s and the cannula size");
+  requireFiniteResult(powerLaw ? j["consistency_pa_s_n"].get<double>() : j["viscosity_pa_s"].get<double>(),
+                      powerLaw ? "the consistency" : "the viscosity", inputs);
   j["pressure_drop_pa"] = dropPa;
   j["pressure_drop_mpa"] = dropPa * 1e-6;
   if (o.json) {
