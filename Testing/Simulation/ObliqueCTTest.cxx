@@ -491,3 +491,40 @@ TEST(ObliqueCT, InjectCommandOnATiltedNrrd) {
             << " voxels of " << sim->GetSpacing()[0] << " mm from " << sim->GetOrigin() << ", direction identity\n";
   for (unsigned a = 0; a < 3; ++a) EXPECT_DOUBLE_EQ(sim->GetSpacing()[a], kSpacing); // the aligned grid's
 }
+
+// The same with bone as a continuum (a box of 150-250 HU bone in 1 mm of cortex, fat outside), so that inject
+// also draws cement_slices.png and cement_surface.png from the files of an oblique run: exit 0, all pictures.
+TEST(ObliqueCT, InjectCommandDrawsEveryPictureForATiltedContinuumCt) {
+  const std::string program = std::string(CEMENTSPH_BINARY_DIR) + "/bin/cementsph";
+  ASSERT_TRUE(fs::exists(program)) << program << ": build the cementsph target first";
+  const fs::path dir = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "oblique-inject-continuum";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto body = ImageType::New();
+  body->Graft(axialCt()); // the grid only; every value is set below from the physical position
+  auto tilted = tiltedCt(body, 20.0);
+  forEachVoxel(tilted, [&](const ImageType::IndexType& i) {
+    ImageType::PointType p;
+    tilted->TransformIndexToPhysicalPoint(i, p);
+    bool inBox = true, inMarrow = true; // box: 1.5 mm inside the axial CT's faces; cortex 1 mm thick
+    for (unsigned a = 0; a < 3; ++a) {
+      const double lo = kOrigin[a] + 1.5, hi = kOrigin[a] + kSpacing * double(kSize[a] - 1) - 1.5;
+      inBox = inBox && p[a] >= lo && p[a] <= hi;
+      inMarrow = inMarrow && p[a] >= lo + 1.0 && p[a] <= hi - 1.0;
+    }
+    tilted->SetPixel(i, !inBox ? -100.f : !inMarrow ? 1000.f : p[0] < kTip[0] ? 150.f : 250.f);
+  });
+  cementsph::imaging::writeVolume(tilted, (dir / "ct.nrrd").string());
+  std::ofstream(dir / "scene.json") << "{\"tip_mm\": [" << kTip[0] << ", " << kTip[1] << ", " << kTip[2]
+                                    << "], \"volume_ml\": 0.3, \"snapshot_interval_s\": 1000}";
+  setenv("OMP_NUM_THREADS", "1", 1);
+  const auto r = cementsph::testing::runProgram(program, {"inject", "--ct", (dir / "ct.nrrd").string(), "--scene",
+                                                          (dir / "scene.json").string(), "--out", (dir / "out").string(), "--quiet"});
+  ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
+  for (const char* f : {"tip_pressure.png", "injection_pressure.png", "cement_slices.png", "cement_surface.png"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  std::ifstream in(dir / "out" / "metrics.json");
+  const nlohmann::json m = nlohmann::json::parse(in);
+  EXPECT_EQ(m["bone_model"].get<std::string>(), "continuum");
+  EXPECT_NEAR(m["cement_volume_ml"].get<double>(), 0.3, 0.003); // volume kept (1 %)
+}
