@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -210,6 +211,16 @@ TEST(HostileNrrd, SpacingsAndDirectionsOutsideTheirRangeAreRefused) {
   expectRefused(nrrd("space: left-posterior-superior\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\n"
                      "space origin: (nan,0,0)"),
                 "space origin");
+  // dimension and sizes that teem would loop or allocate by.
+  for (const auto& [from, to, field] :
+       {std::tuple{"dimension: 3", "dimension: -1", "dimension"}, std::tuple{"dimension: 3", "dimension: 99", "dimension"},
+        std::tuple{"dimension: 3", "dimension: x", "dimension"}, std::tuple{"sizes: 4 3 5", "sizes: 4 3 0", "sizes"},
+        std::tuple{"sizes: 4 3 5", "sizes: 4 3", "sizes"}, std::tuple{"sizes: 4 3 5", "sizes: 4 -3 5", "sizes"}}) {
+    std::string h = nrrdHeader(kDirections);
+    h.replace(h.find(from), std::strlen(from), to);
+    writeFile(dir / "d.nrrd", h + "\n" + data);
+    expectRefused(dir / "d.nrrd", field);
+  }
 }
 
 TEST(HostileNrrd, MultiMemberGzipIsReadAndACorruptMemberRefused) {

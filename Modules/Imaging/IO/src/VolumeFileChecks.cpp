@@ -553,6 +553,22 @@ void checkNrrdHeader(const std::string& path) {
       refuse(path, "NRRD data is bzip2-compressed, which this program's NRRD reader cannot decompress; save it with "
                    "gzip or raw encoding (for example: unu save -e gzip -f nrrd)");
   }
+  // dimension and sizes: teem allocates and loops by them; a count that is not a small positive integer is
+  // damage (a CT is 3-D; 16 is teem's own limit).
+  const auto dimension = field({"dimension"});
+  if (!dimension) refuse(path, "NRRD header has no dimension field");
+  const auto axes = toInteger(trim(*dimension));
+  if (!axes || *axes < 1 || *axes > 16) refuse(path, "dimension: " + shownValue(*dimension) + " is not 1..16 axes (a CT has 3)");
+  {
+    const auto sizesField = field({"sizes"});
+    if (!sizesField) refuse(path, "NRRD header has no sizes field");
+    const auto w = words(*sizesField);
+    bool good = static_cast<long long>(w.size()) == *axes;
+    for (const std::string& t : w) good = good && toInteger(t).value_or(0) >= 1;
+    if (!good)
+      refuse(path, "sizes: " + shownValue(*sizesField) + " is not " + std::to_string(*axes) +
+                       " positive whole numbers (one per axis of dimension)");
+  }
   if (const auto v = field({"spacings"}))
     for (const std::string& w : words(*v)) {
       const auto x = toNumber(w);
