@@ -220,6 +220,23 @@ ImageType::Pointer labelledCt() {
   forEachVoxel(img, [&](const ImageType::IndexType& i) { img->SetPixel(i, float(i[0] + 100 * i[1] + 10000 * i[2])); });
   return img;
 }
+
+// `cementsph inject` as a user runs it, pictures on: `ct` written as NRRD and the scene (its tip the test's,
+// then `sceneKeys`) in a fresh scratch folder `name`; the results in name/out.
+cementsph::testing::ProgramRun injectCommand(const std::string& name, const ImageType* ct, const std::string& sceneKeys,
+                                             fs::path& dir) {
+  const std::string program = std::string(CEMENTSPH_BINARY_DIR) + "/bin/cementsph";
+  dir = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  if (!fs::exists(program)) return {127, "", program + ": build the cementsph target first"};
+  cementsph::imaging::writeVolume(ct, (dir / "ct.nrrd").string());
+  std::ofstream(dir / "scene.json") << "{\"tip_mm\": [" << kTip[0] << ", " << kTip[1] << ", " << kTip[2] << "], "
+                                    << sceneKeys << "}";
+  setenv("OMP_NUM_THREADS", "1", 1); // the child inherits it: one thread on shared cores
+  return cementsph::testing::runProgram(program, {"inject", "--ct", (dir / "ct.nrrd").string(), "--scene",
+                                                  (dir / "scene.json").string(), "--out", (dir / "out").string(), "--quiet"});
+}
 } // namespace
 
 // (c) A flipped or axis-swapped series is reoriented exactly: identity direction, every voxel's value at its
@@ -470,18 +487,9 @@ TEST(ObliqueCT, TiltedSeriesPastesBackOntoItsOwnGrid) {
 // `cementsph inject` on a tilted NRRD, pictures on: exit 0, no crash; its simulated_ct.nrrd is the region of
 // interest of the axis-aligned (resampled) grid, identity direction.
 TEST(ObliqueCT, InjectCommandOnATiltedNrrd) {
-  const std::string program = std::string(CEMENTSPH_BINARY_DIR) + "/bin/cementsph";
-  ASSERT_TRUE(fs::exists(program)) << program << ": build the cementsph target first";
-  const fs::path dir = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "oblique-inject";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const auto tilted = tiltedCt(axialCt(), 20.0);
-  cementsph::imaging::writeVolume(tilted, (dir / "ct.nrrd").string());
-  std::ofstream(dir / "scene.json") << "{\"tip_mm\": [" << kTip[0] << ", " << kTip[1] << ", " << kTip[2]
-                                    << "], \"volume_ml\": 0.1, \"cannula_length_mm\": 5, \"roi_size_mm\": 12}";
-  setenv("OMP_NUM_THREADS", "1", 1);
-  const auto r = cementsph::testing::runProgram(program, {"inject", "--ct", (dir / "ct.nrrd").string(), "--scene",
-                                                          (dir / "scene.json").string(), "--out", (dir / "out").string(), "--quiet"});
+  fs::path dir;
+  const auto r = injectCommand("oblique-inject", tiltedCt(axialCt(), 20.0),
+                               R"("volume_ml": 0.1, "cannula_length_mm": 5, "roi_size_mm": 12)", dir);
   ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
   EXPECT_TRUE(fs::exists(dir / "out" / "tip_pressure.png")) << "pictures on";
   const auto sim = cementsph::imaging::readVolume((dir / "out" / "simulated_ct.nrrd").string());
@@ -495,14 +503,7 @@ TEST(ObliqueCT, InjectCommandOnATiltedNrrd) {
 // The same with bone as a continuum (a box of 150-250 HU bone in 1 mm of cortex, fat outside), so that inject
 // also draws cement_slices.png and cement_surface.png from the files of an oblique run: exit 0, all pictures.
 TEST(ObliqueCT, InjectCommandDrawsEveryPictureForATiltedContinuumCt) {
-  const std::string program = std::string(CEMENTSPH_BINARY_DIR) + "/bin/cementsph";
-  ASSERT_TRUE(fs::exists(program)) << program << ": build the cementsph target first";
-  const fs::path dir = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "oblique-inject-continuum";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  auto body = ImageType::New();
-  body->Graft(axialCt()); // the grid only; every value is set below from the physical position
-  auto tilted = tiltedCt(body, 20.0);
+  const auto tilted = tiltedCt(axialCt(), 20.0); // the grid only: every value is set below from its position
   forEachVoxel(tilted, [&](const ImageType::IndexType& i) {
     ImageType::PointType p;
     tilted->TransformIndexToPhysicalPoint(i, p);
@@ -514,12 +515,8 @@ TEST(ObliqueCT, InjectCommandDrawsEveryPictureForATiltedContinuumCt) {
     }
     tilted->SetPixel(i, !inBox ? -100.f : !inMarrow ? 1000.f : p[0] < kTip[0] ? 150.f : 250.f);
   });
-  cementsph::imaging::writeVolume(tilted, (dir / "ct.nrrd").string());
-  std::ofstream(dir / "scene.json") << "{\"tip_mm\": [" << kTip[0] << ", " << kTip[1] << ", " << kTip[2]
-                                    << "], \"volume_ml\": 0.3, \"snapshot_interval_s\": 1000}";
-  setenv("OMP_NUM_THREADS", "1", 1);
-  const auto r = cementsph::testing::runProgram(program, {"inject", "--ct", (dir / "ct.nrrd").string(), "--scene",
-                                                          (dir / "scene.json").string(), "--out", (dir / "out").string(), "--quiet"});
+  fs::path dir;
+  const auto r = injectCommand("oblique-inject-continuum", tilted, R"("volume_ml": 0.3, "snapshot_interval_s": 1000)", dir);
   ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
   for (const char* f : {"tip_pressure.png", "injection_pressure.png", "cement_slices.png", "cement_surface.png"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
