@@ -26,6 +26,7 @@
 #include <vtkMatrix3x3.h>
 #include <vtkSmartPointer.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -269,6 +270,24 @@ TEST(ObliqueCT, SignedPermutationIsReorientedExactly) {
     });
     EXPECT_EQ(same, 7u * 9u * 11u) << "case " << c;
   }
+  // A region that does not start at index 0 (ITK allows it; the physical voxels unchanged): the same.
+  const auto copy = relabelled(axial, axes[1], signs[1]);
+  auto shifted = ImageType::New();
+  shifted->CopyInformation(copy);
+  ImageType::RegionType region = copy->GetLargestPossibleRegion();
+  region.SetIndex({{3, -2, 5}});
+  shifted->SetRegions(region);
+  ImageType::PointType shiftedOrigin = copy->GetOrigin(); // voxel (3, -2, 5) where voxel (0, 0, 0) was
+  for (unsigned r = 0; r < 3; ++r)
+    for (unsigned a = 0; a < 3; ++a)
+      shiftedOrigin[r] -= copy->GetDirection()[r][a] * copy->GetSpacing()[a] * double(region.GetIndex()[a]);
+  shifted->SetOrigin(shiftedOrigin);
+  shifted->Allocate();
+  std::copy_n(copy->GetBufferPointer(), region.GetNumberOfPixels(), shifted->GetBufferPointer());
+  const auto fromShifted = cementsph::scene::axisAligned(shifted);
+  expectSameGrid(fromShifted, axial);
+  EXPECT_TRUE(std::equal(axial->GetBufferPointer(), axial->GetBufferPointer() + region.GetNumberOfPixels(),
+                         fromShifted->GetBufferPointer()));
   // A truly oblique series is still resampled: isotropic at the smallest spacing.
   auto oblique = ImageType::New();
   oblique->Graft(axial);
