@@ -187,6 +187,93 @@ TEST(VertebraAnatomy, MarrowFatInsideTheBodyIsTheTargetNotALeak) {
   EXPECT_EQ(wrong, 0u);
 }
 
+// The whole body is the target vertebra: every voxel wholly inside the elliptic cylinder (cortex, trabecular
+// bone, fat, the vein inside) is, exactly, except the openings of the posterior wall (the 3 mm foramen and the
+// vein's channel, 1 mm around each, where the wall is open to the canal and the soft tissue).
+TEST(VertebraAnatomy, TheWholeBodyIsTheTarget) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  const Count c = count(ctAnatomy(),
+                        [&](const P& p) {
+                          const bool foramen = p[1] > t.c[1] && std::hypot(p[0] - t.c[0], p[2] - t.c[2]) <= 1.5 + 1;
+                          const bool channel = t.veinDistance(p) <= kVeinR + 1 && t.radial(p) > 0.8;
+                          return t.radial(p) <= 1 && std::abs(p[2] - t.c[2]) <= kH && !foramen && !channel;
+                        },
+                        TissueClass::TargetVertebra);
+  EXPECT_GT(c.inside, 12000u); // pi 20 15 25 / 1.5 mm^3 = 15700 voxels less the boundary shell (~20 %)
+  EXPECT_EQ(c.right, c.inside);
+}
+
+// The default phantom (the bundled Data/vertebra-phantom's layout: no fat, no discs, no vein): the body is the
+// target, exactly, but for the foramen; the canal is canal (>= 95 %); nothing is disc (no end plate has a
+// neighbour within 15 mm); the bundled plan's tip is accepted.
+TEST(VertebraAnatomy, TheDefaultPhantomUnderTheBoneRule) {
+  const phantom::VertebraOptions o;
+  const auto ph = phantom::makeVertebra(o);
+  const Truth t(o);
+  anatomy::Grid g;
+  const auto size = ph.ct->GetLargestPossibleRegion().GetSize();
+  for (int a = 0; a < 3; ++a) {
+    g.size[a] = int(size[a]);
+    g.spacingMm[a] = o.spacingMm[a];
+  }
+  const std::vector<float> hu(ph.ct->GetBufferPointer(), ph.ct->GetBufferPointer() + g.count());
+  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), g, ph.suggestedTipMm, {});
+  EXPECT_EQ(anatomy::requireTipInVertebra(a, hu.data(), ph.suggestedTipMm, false), TissueClass::TargetVertebra);
+  std::size_t body = 0, bodyRight = 0, canal = 0, canalRight = 0, disc = 0;
+  std::size_t n = 0;
+  for (int k = 0; k < g.size[2]; ++k)
+    for (int j = 0; j < g.size[1]; ++j)
+      for (int i = 0; i < g.size[0]; ++i, ++n) {
+        const P p = g.centreMm(i, j, k);
+        bool inBody = true, inCanal = true;
+        for (int q = 0; q < 8; ++q) {
+          P c;
+          for (int e = 0; e < 3; ++e) c[e] = p[e] + ((q >> e) & 1 ? 0.5 : -0.5) * g.spacingMm[e];
+          const bool foramen = c[1] > t.c[1] && std::hypot(c[0] - t.c[0], c[2] - t.c[2]) <= 1.5 + 1;
+          inBody = inBody && t.radial(c) <= 1 && std::abs(c[2] - t.c[2]) <= kH && !foramen;
+          inCanal = inCanal && std::hypot(c[0] - t.canal[0], c[1] - t.canal[1]) <= kCanalR &&
+                    std::abs(c[2] - t.c[2]) <= 0.8 * kH && t.radial(c) > 1;
+        }
+        body += inBody;
+        bodyRight += inBody && a.at(n) == TissueClass::TargetVertebra;
+        canal += inCanal;
+        canalRight += inCanal && a.at(n) == TissueClass::Canal;
+        disc += a.at(n) == TissueClass::Disc;
+      }
+  EXPECT_GT(body, 12000u);
+  EXPECT_EQ(bodyRight, body);
+  EXPECT_GT(canal, 1500u);
+  EXPECT_GE(double(canalRight), 0.95 * double(canal)) << canalRight << " of " << canal;
+  EXPECT_EQ(disc, 0u);
+}
+
+// A pure permutation of the grid's axes (the CT stored z-fastest, its direction saying so) gives the same class
+// in every voxel: the rule follows the patient's axes, not the array's.
+TEST(VertebraAnatomy, APermutedGridGivesTheSameClasses) {
+  const auto& s = scene();
+  const int nx = s.grid.size[0], ny = s.grid.size[1], nz = s.grid.size[2];
+  anatomy::Grid g; // index axes (z, x, y): column 0 is patient z, 1 is x, 2 is y
+  g.size = {nz, nx, ny};
+  g.spacingMm = {s.grid.spacingMm[2], s.grid.spacingMm[0], s.grid.spacingMm[1]};
+  g.originMm = s.grid.originMm;
+  g.direction = {0, 1, 0, 0, 0, 1, 1, 0, 0};
+  std::vector<float> hu(s.hu.size());
+  auto old = [&](int i, int j, int k) { return std::size_t(i) + std::size_t(nx) * (std::size_t(j) + std::size_t(ny) * std::size_t(k)); };
+  auto neu = [&](int i, int j, int k) { return std::size_t(k) + std::size_t(nz) * (std::size_t(i) + std::size_t(nx) * std::size_t(j)); };
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) hu[neu(i, j, k)] = s.hu[old(i, j, k)];
+  // The same voxel, the same place.
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.centreMm(4, 5, 6)[a], s.grid.centreMm(5, 6, 4)[a], 1e-12);
+  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), g, s.truth->c, s.ao);
+  std::size_t differ = 0;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) differ += a.at(neu(i, j, k)) != ctAnatomy().at(old(i, j, k)) ? 1 : 0;
+  EXPECT_EQ(differ, 0u);
+}
+
 // (b) The disc spaces are disc: >= 95 % of the voxels wholly inside each analytic disc (the body's elliptic
 // section between the end plates; the shell of partial volume against the end plates and the edge left out).
 TEST(VertebraAnatomy, TheDiscSpacesAreDisc) {
