@@ -559,6 +559,8 @@ void checkNrrdHeader(const std::string& path) {
   if (!dimension) refuse(path, "NRRD header has no dimension field");
   const auto axes = toInteger(trim(*dimension));
   if (!axes || *axes < 1 || *axes > 16) refuse(path, "dimension: " + shownValue(*dimension) + " is not 1..16 axes (a CT has 3)");
+  if (*axes != 3)
+    refuse(path, "not a 3-D volume (dimension: " + std::to_string(*axes) + "); a CT has 3 axes and one value per voxel");
   {
     const auto sizesField = field({"sizes"});
     if (!sizesField) refuse(path, "NRRD header has no sizes field");
@@ -568,6 +570,10 @@ void checkNrrdHeader(const std::string& path) {
     if (!good)
       refuse(path, "sizes: " + shownValue(*sizesField) + " is not " + std::to_string(*axes) +
                        " positive whole numbers (one per axis of dimension)");
+  }
+  if (const auto v = field({"spacings"})) {
+    if (words(*v).size() != std::size_t(*axes))
+      refuse(path, "spacings: " + shownValue(*v) + " is not one spacing per axis (" + std::to_string(*axes) + ")");
   }
   if (const auto v = field({"spacings"}))
     for (const std::string& w : words(*v)) {
