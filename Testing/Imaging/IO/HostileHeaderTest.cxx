@@ -168,6 +168,8 @@ TEST(HostileMetaImage, DimensionsAndSpacingsOutsideTheirRangeAreRefused) {
                               "ElementSpacing = -0.5 0.5 0.5", "ElementSpacing = 1e300 0.5 0.5", "ElementSpacing = 0.5 0.5"})
     expectRefused(metaCase(dir, "s.mhd", spacing, "all.raw"), "ElementSpacing");
   expectRefused(metaCase(dir, "o.mhd", "Offset = 0 nan 0", "all.raw"), "Offset");
+  // No spacing at all: MetaIO would assume 1 mm.
+  expectRefused(metaCase(dir, "none.mhd", "ElementSpacing", "all.raw"), "ElementSpacing");
   expectRefused(metaCase(dir, "t.mhd", "TransformMatrix = 1 0 0 0 0 0 0 0 1", "all.raw"), "TransformMatrix");
   expectRefused(metaCase(dir, "c.mhd", "ElementNumberOfChannels = 3", "all.raw"), "ElementNumberOfChannels");
   // A value of 100 kB is echoed cut short (expectRefused bounds the message's length); a header over 1 MiB
@@ -199,6 +201,7 @@ TEST(HostileNrrd, SpacingsAndDirectionsOutsideTheirRangeAreRefused) {
   };
   expectValues(nrrd(kDirections), 0.5);
   expectValues(nrrd("spacings: 0.5 0.5 0.5"), 0.5);
+  expectRefused(nrrd("kinds: domain domain domain"), "spacings"); // no spacing: teem would assume 1 mm
   for (const char* s : {"spacings: nan 0.5 0.5", "spacings: 0.5 inf 0.5", "spacings: 0.5 0.5 0", "spacings: 0.5 0.5 -0.5",
                         "spacings: 0.5 0.5 abc"})
     expectRefused(nrrd(s), "spacings");

@@ -389,6 +389,9 @@ void checkMetaHeader(const std::string& path) {
     if (!v) return std::nullopt;
     return std::make_pair(key, *v);
   };
+  if (!field("elementspacing") && !field("elementsize"))
+    refuse(path, "MetaImage header has no ElementSpacing, so the voxel size is unknown (the reader would assume "
+                 "1 mm); add 'ElementSpacing = x y z' in mm");
   for (const char* key : {"ElementSpacing", "ElementSize"})
     if (const auto kv = named(key))
       for (double mm : numbersOf(path, kv->first, kv->second, 3)) requireSpacing(path, kv->first + " holds", mm);
@@ -571,6 +574,10 @@ void checkNrrdHeader(const std::string& path) {
       refuse(path, "sizes: " + shownValue(*sizesField) + " is not " + std::to_string(*axes) +
                        " positive whole numbers (one per axis of dimension)");
   }
+  // No spacing at all: the reader would assume 1 mm, a guess that silently scales every distance.
+  if (!field({"spacings"}) && !field({"space directions"}))
+    refuse(path, "NRRD header has neither spacings nor space directions, so the voxel size is unknown (the reader "
+                 "would assume 1 mm); add 'spacings: x y z' in mm");
   if (const auto v = field({"spacings"})) {
     if (words(*v).size() != std::size_t(*axes))
       refuse(path, "spacings: " + shownValue(*v) + " is not one spacing per axis (" + std::to_string(*axes) + ")");
