@@ -318,6 +318,32 @@ TEST(VertebraAnatomy, TheVeinOutsideTheBodyIsVessel) {
   EXPECT_EQ(inside.right, inside.inside);
 }
 
+// The vessel rule's two arms and its limit, on a copy of the CT with two tubes along z written into the soft
+// tissue (20 mm long, mid height): a contrast-filled one (200 HU, radius 4 mm, 5 mm clear of the body,
+// anterior-left like an aorta) is vessel; a thick one of muscle HU (55 HU, radius 6 mm, against the body's right
+// side wall) is not (thicker than max_vein_radius_mm 3): >= 95 % of the voxels wholly inside each.
+TEST(VertebraAnatomy, ContrastTubesAreVesselsThickMuscleIsNot) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  const P aorta{t.c[0] + 26, t.c[1] - 8, 0}, muscle{t.c[0] - 25, t.c[1] - 4, 0};
+  auto inTube = [&](const P& p, const P& axis, double r) {
+    return std::hypot(p[0] - axis[0], p[1] - axis[1]) <= r && std::abs(p[2] - t.c[2]) <= 10;
+  };
+  std::vector<float> hu = s.hu;
+  s.forEach([&](std::size_t n, const P& p, const std::array<P, 8>&) {
+    if (inTube(p, aorta, 4)) hu[n] = 200 + (hu[n] - 20); // the same noise about the new mean
+    if (inTube(p, muscle, 6) && t.radial(p) > 1) hu[n] = 55 + (hu[n] - 20);
+  });
+  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), s.grid, t.c, s.ao);
+  const Count enhanced = count(a, [&](const P& p) { return inTube(p, aorta, 4); }, TissueClass::Vessel);
+  EXPECT_GT(enhanced.inside, 400u); // pi 4^2 20 / 1.5 mm^3 = 670 voxels less the shell (~30 %)
+  EXPECT_GE(enhanced.share(), 0.95) << enhanced.right << " of " << enhanced.inside;
+  const Count thick = count(a, [&](const P& p) { return inTube(p, muscle, 6) && t.radial(p) > 1 + 2.0 / kB; },
+                            TissueClass::OtherSoftTissue);
+  EXPECT_GT(thick.inside, 700u); // the part of the 6 mm tube 2 mm clear of the body
+  EXPECT_GE(thick.share(), 0.95) << thick.right << " of " << thick.inside;
+}
+
 // (e) A tip outside the target's bone is refused with one line naming the tissue; the body's centre and a point
 // in the enclosed marrow fat are accepted.
 TEST(VertebraAnatomy, TipsOutsideBoneAreRefusedByTissue) {
