@@ -8,7 +8,7 @@ set(CEMENTSPH_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/CementSPH)
 
 # Library target -> the name it has after CementSPH:: (as the in-tree aliases).
 set(CEMENTSPH_EXPORTED_LIBRARIES
-  CementSPH_SPH:SPH CementSPH_VoxelDarcy:VoxelDarcy CementSPH_Rendering:Rendering CementSPH_SurfaceMetrics:SurfaceMetrics
+  CementSPH_Provenance:Provenance CementSPH_SPH:SPH CementSPH_VoxelDarcy:VoxelDarcy CementSPH_Rendering:Rendering CementSPH_SurfaceMetrics:SurfaceMetrics
   CementSPH_ImagingIO:ImagingIO CementSPH_Registration:Registration CementSPH_Segmentation:Segmentation
   CementSPH_Anatomy:Anatomy CementSPH_Scene:Scene CementSPH_CTScene:CTScene CementSPH_Phantom:Phantom CementSPH_Study:Study
   CementSPH_Planning:Planning CementSPH_Parallel:Parallel

@@ -4,6 +4,7 @@
 // Jaccard, cement volume, mean spreading distance from the injection point, centroid offset.
 // A thin layer over CementSPH::ImagingIO, Registration, Segmentation and SurfaceMetrics.
 // Nothing is written until everything is computed, and every file is written atomically.
+#include "cementsph/provenance/Provenance.h"
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
 
@@ -249,6 +250,7 @@ int runCompare(const CompareRequest& a) {
   timing["write_s"] = seconds(t);
   timing["total_s"] = seconds(start);
   metrics["timing_s"] = timing;
+  metrics["provenance"] = cementsph::provenance::toJson();
   writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
 
   // 6. Pictures, after metrics.json so a rendering failure never loses the numbers. A failed picture

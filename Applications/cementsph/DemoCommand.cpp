@@ -8,6 +8,7 @@
 // gets from them. DIR/metrics.json gathers the headline figures of the three. The phantom's post scan was
 // itself made by the model (cementsph phantom), so the comparison checks the pipeline; it is not a validation
 // of the model, and metrics.json and the last line say so (post_scan_made_by).
+#include "cementsph/provenance/Provenance.h"
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
 #include "SceneOverrides.h"
@@ -80,6 +81,7 @@ int runVertebraDemo(const DemoOptions& o) {
                         "injection_pressure_pa", "leakage_volume_ml", "leakage_sites", "wall_time_s"})
     summary[k] = m.contains(k) ? m[k] : nlohmann::json(nullptr);
   summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary["provenance"] = cementsph::provenance::toJson();
   cementsph::imaging::writeTextAtomically((out / "metrics.json").string(), summary.dump(2) + "\n");
   std::cout << "demo --vertebra: " << m.at("bone_model").get<std::string>() << " bone (porosity at the tip "
             << m.at("porosity_at_tip").get<double>() << "), " << m.at("cement_volume_ml").get<double>()
@@ -176,6 +178,7 @@ int runDemo(const DemoOptions& o) {
   metrics["xray"]["final_frame_iou"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("iou");
   metrics["post_scan_made_by"] = "the model itself (pipeline check, not a validation)";
   metrics["wall_time_s"] = wall;
+  metrics["provenance"] = cementsph::provenance::toJson();
   cementsph::imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
   std::cout << "demo done in " << wall << " s: " << (out / "metrics.json").string() << ", "
             << (out / "compare" / "surfaces.png").string() << ", " << (out / "compare" / "slices.png").string()

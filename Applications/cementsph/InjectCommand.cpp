@@ -87,9 +87,10 @@ int runInject(const InjectRequest& a) {
   const nlohmann::json m = nlohmann::json::parse(filter->GetMetricsJSON());
   std::cout << "injected " << m["volume_injected_ml"].get<double>() << " ml in " << m["steps"] << " steps, "
             << m["wall_time_s"].get<double>() << " s wall (real-time factor " << m["real_time_factor"].get<double>()
-            << "); " << m["fluid_particles"] << " fluid, " << m["fixed_particles"] << " fixed particles ("
-            << m["solid_voxels_kept"] << " of " << m["solid_voxels_total"] << " solid voxels kept); "
-            << m["escaped_particles"] << " left the region; results in " << a.out << "\n";
+            << "); model " << m["pressure_model"].get<std::string>() << ", " << m["cement_points"]
+            << (m.contains("fluid_particles") ? " particles" : " voxels holding cement")
+            << (m.contains("escaped_particles") ? ", " + m["escaped_particles"].dump() + " left the region" : std::string())
+            << "; results in " << a.out << "\n";
   if (a.noPictures) return 0;
   int status = 0;
   auto picture = [&](const std::string& name, const std::function<void()>& draw) {

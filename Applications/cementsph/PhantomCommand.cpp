@@ -226,9 +226,8 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
                             {"cement_voxels", post.cementVoxels},
                             {"cement_volume_ml", post.cementVolumeMl},
                             {"volume_injected_ml", post.injectionMetrics.value("volume_injected_ml", 0.0)},
-                            {"fluid_particles", post.injectionMetrics.value("fluid_particles", 0)},
-                            {"escaped_particles", post.injectionMetrics.value("escaped_particles", 0)},
-                            {"steps", post.injectionMetrics.value("steps", 0)},
+                            {"cement_points", post.injectionMetrics.at("cement_points")},
+                            {"steps", post.injectionMetrics.at("steps")},
                             {"numerics", toJson(po.numerics)},
                             {"scene", post.scene},
                             {"generation_time_s", postS}};

@@ -3,6 +3,7 @@
 // every evaluation, the optimiser's stop reason), DIR/plan.csv, DIR/convergence.png and DIR/best/ (the best
 // plan's injection, with cement_slices.png through the target: cement blue, leaks red, the uncovered target
 // yellow).
+#include "cementsph/provenance/Provenance.h"
 #include "CommandRegistry.h"
 #include "OutputFiles.h"
 
@@ -101,7 +102,9 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
     if (!farm.coordinator()) return 0; // a worker: its starts went to rank 0
     const fs::path out(a->out);
     fs::create_directories(out);
-    app::writeFileAtomically(out / "plan.json", plan.toJson(r).dump(2) + "\n");
+    nlohmann::json planJson = plan.toJson(r);
+    planJson["provenance"] = cementsph::provenance::toJson();
+    app::writeFileAtomically(out / "plan.json", planJson.dump(2) + "\n");
     app::writeFileAtomically(out / "plan.csv", plan.csv());
     int status = 0;
     try {

@@ -7,6 +7,7 @@
 // spreading_vs_viscosity.csv and .png. A thin layer over CementSPH::Study (Modules/Simulation/Study).
 // AlignedPost.h (ITK transforms, with ITK's bundled Eigen Geometry) must come before the system Eigen of
 // SceneConfig.h.
+#include "cementsph/provenance/Provenance.h"
 #include "cementsph/study/AlignedPost.h"
 
 #include "CommandRegistry.h"
@@ -243,6 +244,7 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
       j["viscosity_runs_done"] = viscosityRows.size();
       j["runs_wall_time_s"] = runsWall();
       j["study_wall_time_s"] = seconds();
+      j["provenance"] = cementsph::provenance::toJson();
       imaging::writeTextAtomically((out / "study.json").string(), j.dump(2) + "\n");
     };
     int status = 0;

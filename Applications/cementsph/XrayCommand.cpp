@@ -11,6 +11,7 @@
 // sequence.csv, metrics.json, xray_frames.png (Fig. 12 style) and projected_area.png. Everything is
 // computed first and written into a temporary sibling folder that is then moved into place, so bad input
 // or a failed write leaves no partial output.
+#include "cementsph/provenance/Provenance.h"
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
 #include "DrrOptions.h"
@@ -446,6 +447,7 @@ int runXray(const XrayRequest& a) {
   if (const auto backend = rendering::lastRenderBackend()) metrics["render_backend"] = rendering::renderBackendName(*backend);
   metrics["timing_s"] = {{"drr_and_segmentation", drrSeconds}, {"write", writeSeconds},
                          {"pictures", pictureSeconds}, {"total", seconds(start)}};
+  metrics["provenance"] = cementsph::provenance::toJson();
   cementsph::imaging::writeTextAtomically((dir / "metrics.json").string(), metrics.dump(2) + "\n");
   staged.publish();
 

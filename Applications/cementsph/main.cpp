@@ -4,6 +4,7 @@
 
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/LibraryMessages.h"
+#include "cementsph/provenance/Provenance.h"
 #include "cementsph/sph/Simulation.h"
 
 #include <omp.h>
@@ -94,6 +95,7 @@ int main(int argc, char** argv) {
   // SIGXFSZ killing the process with a partial file.
   std::signal(SIGXFSZ, SIG_IGN);
   chooseDefaultThreads();
+  cementsph::provenance::setCommandLine(argc, argv);
   // Under mpirun every rank runs the command; rank 0 reports the errors (a worker's own reach it through
   // the case farm), so a bad option is one line, not one per rank.
   const bool quietRank = cementsph::parallel::launchedByMpi() && cementsph::parallel::launchedRank() != 0;

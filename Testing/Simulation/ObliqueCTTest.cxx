@@ -443,6 +443,8 @@ TEST(ObliqueCT, FlippedAndSwappedSeriesGiveTheAxialFigures) {
     const auto copy = relabelled(axial, axes[c], signs[c]);
     const FilterRun b = runFilter(copy, 40.0);
     ASSERT_FALSE(b.metrics.is_null()) << names[c];
+    EXPECT_EQ(b.metrics["ct_orientation"], "reoriented") << names[c]; // exact: nothing interpolated
+    EXPECT_FALSE(b.metrics["ct_resampled_to_axis_aligned"].get<bool>()) << names[c];
     expectSameGrid(b.simulated, copy); // the output on the copy's own grid
     const double pb = b.metrics["final_tip_pressure_pa"].get<double>(), vb = b.metrics["cement_volume_ml"].get<double>();
     const double dice = cementDice(a, b);
@@ -462,6 +464,7 @@ TEST(ObliqueCT, TiltedSeriesPastesBackOntoItsOwnGrid) {
   const FilterRun t = runFilter(tilted, roi);
   ASSERT_FALSE(t.metrics.is_null());
   EXPECT_TRUE(t.metrics["ct_resampled_to_axis_aligned"].get<bool>());
+  EXPECT_EQ(t.metrics["ct_orientation"], "resampled");
   int inDims[3], outDims[3];
   t.vtkInput->GetDimensions(inDims);
   t.vtkSimulated->GetDimensions(outDims);

@@ -67,7 +67,7 @@ TEST(SPHInjectionFilter, ParticlesAndSimulatedCTFromACTImage) {
   EXPECT_LE(m["volume_injected_ml"].get<double>(), 0.1);
   vtkPolyData* particles = filter->GetParticlesOutput();
   ASSERT_NE(particles, nullptr);
-  EXPECT_EQ(std::size_t(particles->GetNumberOfPoints()), m["fluid_particles"].get<std::size_t>());
+  EXPECT_EQ(std::size_t(particles->GetNumberOfPoints()), m["cement_points"].get<std::size_t>());
   EXPECT_EQ(particles->GetNumberOfVerts(), particles->GetNumberOfPoints());
   for (const char* a : {"velocity_m_per_s", "density_kg_per_m3", "pressure_pa", "age_s"})
     EXPECT_NE(particles->GetPointData()->GetArray(a), nullptr) << a;

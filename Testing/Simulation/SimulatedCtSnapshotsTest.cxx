@@ -137,7 +137,7 @@ TEST(SimulatedCtSnapshots, FramesExistMatchTheSnapshotsAndEndAtTheFinalCT) {
     std::vector<Eigen::Vector3d> positions;
     for (vtkIdType p = 0; p < poly->GetNumberOfPoints(); ++p)
       positions.emplace_back(Eigen::Vector3d(poly->GetPoint(p)[0], poly->GetPoint(p)[1], poly->GetPoint(p)[2]) * 1e-3);
-    ASSERT_EQ(positions.size(), r.metrics.at("fluid_particles").get<std::size_t>());
+    ASSERT_EQ(positions.size(), r.metrics.at("cement_points").get<std::size_t>());
     const auto size = frame->GetLargestPossibleRegion().GetSize();
     double worst = 0, largestRise = 0;
     for (long kk = 0; kk < long(size[2]); ++kk)

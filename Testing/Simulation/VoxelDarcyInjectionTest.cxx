@@ -1,4 +1,4 @@
-// The default creeping-flow path of `cementsph inject` (pressure_model voxel-darcy, VoxelDarcyInjection.h)
+// The default creeping-flow path of `cementsph inject` (pressure_model voxel-darcy, src/Models/VoxelDarcy)
 // on a synthetic porous CT (ScaffoldCT.h), against the issue "Physical cement"'s oracles on a CT:
 //  * the pressure is proportional to the viscosity: 400 against 100 Pa s, tip and injection pressure 4.00
 //    within 2 %, and the same cement (simulated CTs equal to 0.01 HU, so the surfaces coincide);

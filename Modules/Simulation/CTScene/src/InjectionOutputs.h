@@ -1,8 +1,9 @@
-// The files of an injection (InjectionRunner.h), written the same way by both runners (the particle path in
-// InjectionRunner.cpp, the voxel-grid path in VoxelDarcyInjection.cpp).
+// The files of an injection (InjectionRunner.h), written by the one driver (InjectionDriver.cpp) for every
+// engine (InjectionModel.h).
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/scene/InjectionModel.h"
 #include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneConfig.h"
 
@@ -19,10 +20,7 @@
 
 namespace cementsph::scene::detail {
 
-// One row of tip_pressure.csv: the outlet pressure and the cannula's drop at a time [s, Pa, Pa].
-struct TipRecord {
-  double time, tipPa, cannulaPa;
-};
+using scene::TipRecord;
 
 // particles.pvd: (time [s], file name) of each snapshot.
 std::string particleCollection(const std::vector<std::pair<double, std::string>>& snapshots);

@@ -87,8 +87,8 @@ double evaluate(unsigned, const double* x, double*, void* data) {
     }
     const scene::InjectionRunResult run = scene::runInjection(c->ct, s, {});
     e.coverage = targetCoverage(run.particles, r.targetCentreMm, r.targetRadiusMm);
-    e.syringeMpa = run.metrics.value("max_injection_pressure_pa", 0.0) * 1e-6;
-    e.leakageMl = run.metrics.value("leakage_volume_ml", 0.0);
+    e.syringeMpa = run.summary.maxInjectionPressurePa * 1e-6;
+    e.leakageMl = run.summary.leakageVolumeMl;
     const double penalty = std::max(0.0, e.syringeMpa / r.maxSyringeMpa - 1.0) +
                            std::max(0.0, e.leakageMl - r.maxLeakageMl) / 0.1;
     e.withinLimits = penalty <= 0.0;

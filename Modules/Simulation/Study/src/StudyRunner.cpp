@@ -69,18 +69,19 @@ StudyRow StudyRunner::score(const StudyRunSpec& spec, const SimulatedRun& simula
     row.failure = simulated.failure.empty() ? "no simulated CT" : simulated.failure;
     return row;
   }
-  const auto& m = simulated.metrics;
-  row.wallTimeS = m.at("wall_time_s").get<double>();
-  row.realTimeFactor = m.at("real_time_factor").get<double>();
-  row.simulatedTimeS = m.at("simulated_time_s").get<double>();
-  row.steps = m.at("steps").get<std::size_t>();
-  row.fluidParticles = m.at("fluid_particles").get<std::size_t>();
-  row.fixedParticles = m.at("fixed_particles").get<std::size_t>();
-  row.escapedParticles = m.at("escaped_particles").get<std::size_t>();
-  row.volumeInjectedMl = m.at("volume_injected_ml").get<double>();
-  row.particleSpreadingMm = m.at("mean_spreading_distance_mm").get<double>();
-  row.maxTipPressurePa = m.at("max_tip_pressure_pa").get<double>();
-  row.fluidInSolidFraction = m.at("fluid_in_solid_fraction").get<double>();
+  // The run's typed summary (the metrics crossed a process boundary as JSON under MPI).
+  const scene::InjectionSummary m = scene::InjectionSummary::fromJson(simulated.metrics);
+  row.wallTimeS = m.wallTimeS;
+  row.realTimeFactor = m.wallTimeS > 0 ? m.simulatedTimeS / m.wallTimeS : 0.0;
+  row.simulatedTimeS = m.simulatedTimeS;
+  row.steps = m.steps;
+  row.fluidParticles = m.cementPoints; // particles, or voxels holding cement
+  row.fixedParticles = m.particles ? m.particles->fixed : 0;     // an engine without particles has none
+  row.escapedParticles = m.particles ? m.particles->escaped : 0;
+  row.volumeInjectedMl = m.volumeInjectedMl;
+  row.particleSpreadingMm = m.meanSpreadingDistanceMm;
+  row.maxTipPressurePa = m.maxTipPressurePa;
+  row.fluidInSolidFraction = m.fluidInSolidFraction;
 
   const auto start = std::chrono::steady_clock::now();
   AnalysedCement c = analyse(simulated.simulatedCt);

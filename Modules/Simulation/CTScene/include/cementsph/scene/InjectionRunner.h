@@ -1,4 +1,6 @@
-// The inject runner: a CT and a scene in, an injection simulation to the end of injection, files out.
+// The inject runner: a CT and a scene in, an injection simulation to the end of injection, files out. One
+// driver (src/InjectionDriver.cpp) for every engine (InjectionModel.h: the particles, src/Models/Particles; the
+// voxel-grid Darcy filling, src/Models/VoxelDarcy).
 //
 // Assembly (as Testing/Core/SPH/InjectionScene.h, with the CT's porous solid): model preset (+ the scene's
 // overrides), d = 2r, h = (h/d) d; the porous solid of the ROI (PorousSolid.h) as fixed particles of mass
@@ -29,6 +31,7 @@
 #pragma once
 
 #include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/scene/InjectionModel.h"
 #include "cementsph/scene/SceneConfig.h"
 #include "cementsph/sph/Particles.h"
 
@@ -49,11 +52,8 @@ struct InjectionRunOptions {
   std::function<bool(double)> onProgress;
 };
 
-struct InjectionRunResult {
-  nlohmann::json metrics;
-  imaging::ImageType::Pointer simulatedCt;   // ROI of the CT grid
-  vtkSmartPointer<vtkPolyData> particles;    // the final particles (mm, with the point arrays)
-};
+// The typed result (InjectionModel.h): summary, the engine's figures, metrics.json as written, the images.
+using InjectionRunResult = InjectionResult;
 
 // Throws std::invalid_argument for a bad scene or CT/tip combination, sph::SimulationError if the run goes
 // unstable, std::runtime_error for output failures.

@@ -91,7 +91,7 @@ struct PlanResult {
   std::string csv() const; // one row per evaluation
 };
 
-// The fraction of a sphere's volume covered by the cement points of an injection (VoxelDarcyInjection.h's
+// The fraction of a sphere's volume covered by the cement points of an injection (VoxelDarcyInjectionModel.cpp's
 // particles: cement_volume_mm3, fill_fraction and porosity per voxel centre).
 double targetCoverage(vtkPolyData* cementVoxels, const Eigen::Vector3d& centreMm, double radiusMm);
 

@@ -1,0 +1,182 @@
+// One interface for every injection engine (docs/architecture.md, "Injection models").
+//
+// An engine (the SPH particles, the voxel-grid Darcy filling, the next one: a second phase, a fracture model)
+// is an InjectionModel registered by name (InjectionModelRegistry; the built-in ones in
+// src/InjectionModels.cpp, one line each). One driver, runInjection (InjectionRunner.h), owns everything the
+// engines share: the scene's validation, the CT's orientation, the bone model and region of interest, the
+// model choice, the time loop, snapshots, progress and stopping, the X-ray/CT series, the outlet-pressure
+// series, and metrics.json, written once from the typed InjectionResult. An engine only sets itself up on the
+// region, advances, and says what it holds.
+//
+// A step of the driver (InjectionDriver.cpp):
+//   model.advance(dtMax)          one step of at most dtMax [s] (the next snapshot or the end of injection)
+//   model.outlet()                the outlet pressure and the cannula's drop after it [Pa]
+//   model.leakedVolumeM3()        with stop_at_first_leak: cement outside bone now
+//   snapshot (model.cement(), model.cementDensity() -> simulated CT), progress (model.state())
+// then model.finish(stopped) and model.report(result).
+#pragma once
+
+#include "cementsph/imaging/ImageTypes.h"
+#include "cementsph/scene/ModelSelection.h"
+#include "cementsph/scene/PorousSolid.h"
+#include "cementsph/scene/SceneConfig.h"
+#include "cementsph/sph/Presets.h"
+
+#include <nlohmann/json.hpp>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cementsph::scene {
+
+// One row of tip_pressure.csv: the outlet pressure and the cannula's drop at a time [s, Pa, Pa].
+struct TipRecord {
+  double time, tipPa, cannulaPa;
+};
+
+// Counts only a particle engine has (absent for an engine without particles, never faked as zeros).
+struct ParticleCounts {
+  std::size_t fluid = 0, fixed = 0, cannulaWall = 0, escaped = 0;
+};
+
+// Leakage: cement outside bone (only where the bone model knows what bone is: the continuum from HU).
+struct LeakageSite {
+  std::array<double, 3> positionMm{}; // volume-weighted centre, the CT's patient frame (LPS)
+  double firstTimeS = 0, volumeMl = 0;
+  std::string siteClass;              // "soft-tissue" (the HU rule), or an anatomical class
+};
+
+// The figures every engine reports, typed. metrics.json is toJson() of this (InjectionResult::metrics).
+struct InjectionSummary {
+  // The run.
+  double volumeRequestedMl = 0, volumeInjectedMl = 0, cementVolumeMl = 0;
+  double simulatedTimeS = 0, wallTimeS = 0;
+  bool stoppedEarly = false, stoppedAtFirstLeak = false;
+  std::size_t steps = 0;
+  std::size_t cementPoints = 0;      // points of the cement output (particles, or voxels holding cement)
+  std::optional<ParticleCounts> particles;
+  // Which model ran and why ("model only what a scene needs").
+  std::string engine;                // the registered name: "voxel-darcy", "incompressible", "equation-of-state"
+  std::string model, modelReason, recommendedPressureModel, modelPreset, resistance, viscosityLaw;
+  std::string boneModel, boneModelReason;
+  nlohmann::json dimensionlessNumbers;
+  bool pressureIsPhysical = false;   // gauge Pa; the weakly compressible pressure is the model's own
+  bool ctResampled = false;          // an oblique CT was resampled onto an axis-aligned grid
+  std::string ctOrientation;         // "axial", "reoriented" (axes flipped/swapped, exact) or "resampled" (oblique)
+  // The region of interest on the (axis-aligned) CT grid.
+  std::array<long, 3> roiStart{}, roiSize{};
+  std::size_t solidVoxelsKept = 0, solidVoxelsTotal = 0, connectedPoreVoxels = 0;
+  // Pressures [Pa].
+  double finalTipPressurePa = 0, maxTipPressurePa = 0, tipPressureBaselinePa = 0;
+  double cannulaPressureDropPa = 0, injectionPressurePa = 0, maxInjectionPressurePa = 0;
+  // The cement.
+  double meanSpreadingDistanceMm = 0;
+  double massBalanceError = 0;       // (injected - held - left the region) / injected
+  double fluidInSolidFraction = 0;   // of the cement, the share in solid voxels
+  double finalViscosityPaS = 0;
+  double huPerRelativeDensity = 0;   // k of the simulated CT [HU]
+  bool leakageAssessed = false;
+  double leakageVolumeMl = 0;
+  std::vector<LeakageSite> leakageSites;
+  nlohmann::json volumeHistory = nlohmann::json::array(); // {time_s, volume_injected_ml, cement_volume_ml}
+
+  nlohmann::json toJson() const;
+  // The inverse, for a summary that crossed a process boundary (MPI studies); throws std::invalid_argument
+  // naming a missing or mistyped key.
+  static InjectionSummary fromJson(const nlohmann::json& metrics);
+};
+
+// What a run returns: the typed summary, the engine's own figures (solver statistics, particle sums: keys
+// that name their unit), and the images.
+struct InjectionResult {
+  InjectionSummary summary;
+  nlohmann::json engineFigures = nlohmann::json::object();
+  nlohmann::json metrics;                      // summary.toJson() merged with engineFigures (metrics.json)
+  imaging::ImageType::Pointer simulatedCt;     // the (axis-aligned) CT's grid within the region of interest
+  imaging::ImageType::Pointer regionCt;        // the same region of the CT the engine ran on, before cement
+  vtkSmartPointer<vtkPolyData> particles;      // the cement at the end (mm, the CT's frame, point arrays)
+  std::vector<TipRecord> tipSeries;
+};
+
+// What a model sets itself up on: the region and the choices the driver made.
+struct InjectionSetup {
+  const imaging::ImageType* ct = nullptr;      // axis-aligned (AxisAlignedCT.h)
+  const SceneConfig* scene = nullptr;
+  const sph::ModelPreset* preset = nullptr;
+  sph::ModelParameters model;                  // the preset's with the scene's overrides; h set
+  const PorousSolid* solid = nullptr;
+  const ModelChoice* choice = nullptr;
+  bool continuum = false;                      // bone as a continuum from HU (BoneCalibration.h)
+};
+
+class InjectionModel {
+public:
+  virtual ~InjectionModel() = default;
+  // Sets the engine up; std::invalid_argument (one line naming the scene key) for a scene it cannot run.
+  virtual void start(const InjectionSetup& setup) = 0;
+  virtual double time() const = 0;                        // simulated [s]
+  // One step of at most dtMax [s]; an engine with its own stability limit may take less. Throws
+  // sph::SimulationError if the run goes unstable (naming where and why).
+  virtual void advance(double dtMax) = 0;
+  // The outlet (tip) pressure and the cannula's pressure drop now [Pa].
+  virtual TipRecord outlet() const = 0;
+  virtual double injectedVolumeM3() const = 0;
+  virtual double cementVolumeM3() const = 0;
+  // Cement outside bone now [m^3] (0 where the bone model has no such class).
+  virtual double leakedVolumeM3() const { return 0.0; }
+  // What the run holds, for the progress line ("674 fluid + 2100 fixed particles, 812 steps").
+  virtual std::string state() const = 0;
+  // Cement density per ROI voxel (PorousSolid::grid order) [kg/m^3], for the simulated CT.
+  virtual std::vector<double> cementDensity() const = 0;
+  // The cement as points (mm, the CT's frame) with the engine's point arrays (particles_NNNN.vtp).
+  virtual vtkSmartPointer<vtkPolyData> cement() const = 0;
+  // The state at the end: stopped, the driver stopped it early.
+  virtual void finish(bool stopped) { (void)stopped; }
+  // The engine's figures: fills what it knows of the summary (spreading, pressures' baseline, leakage, ...) and
+  // its own keys in engineFigures.
+  virtual void report(InjectionSummary& summary, nlohmann::json& engineFigures) const = 0;
+  // Files of the engine's own (e.g. cement_labels.nrrd) in outDir, on the simulated CT's grid.
+  virtual void writeFiles(const std::string& outDir, const imaging::ImageType* simulatedCt) const {
+    (void)outDir, (void)simulatedCt;
+  }
+  // The pressure column tip_pressure.csv subtracts (none: the model's pressure has no baseline yet).
+  virtual std::optional<double> pressureBaselinePa() const { return 0.0; }
+};
+
+// Engines by name. A new engine is one folder (src/Models/<Name>/) and one line in src/InjectionModels.cpp;
+// a test or a plug-in may add one at run time.
+class InjectionModelRegistry {
+public:
+  using Factory = std::function<std::unique_ptr<InjectionModel>()>;
+  struct Entry {
+    Factory make;
+    std::string description; // what metrics.json's "model" says: "incompressible-darcy-on-voxels", ...
+  };
+  static InjectionModelRegistry& instance(); // with the built-in engines registered
+  void add(const std::string& name, Factory factory, std::string description);
+  bool has(const std::string& name) const;
+  const Entry& at(const std::string& name) const; // std::invalid_argument listing the names
+  std::vector<std::string> names() const;
+
+private:
+  std::map<std::string, Entry> entries_;
+};
+
+// An engine's pressure-solver figures under the keys both Darcy engines report: pressure_solves,
+// pressure_solver_iterations_mean, pressure_solver_worst_residual, pressure_solver_unconverged,
+// pressure_solve_wall_s.
+void addPressureSolverFigures(nlohmann::json& engineFigures, std::size_t solves, std::size_t iterations,
+                              double worstResidual, std::size_t unconverged, double solveSeconds);
+
+// The built-in engines (src/InjectionModels.cpp).
+void registerBuiltInInjectionModels(InjectionModelRegistry& registry);
+
+} // namespace cementsph::scene

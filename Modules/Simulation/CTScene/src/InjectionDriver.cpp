@@ -1,0 +1,225 @@
+// The one driver of every injection engine (InjectionModel.h): what the engines share lives here once.
+#include "cementsph/scene/InjectionRunner.h"
+
+#include "InjectionOutputs.h"
+
+#include "cementsph/provenance/Provenance.h"
+#include "cementsph/scene/AxisAlignedCT.h"
+#include "cementsph/scene/ModelSelection.h"
+#include "cementsph/scene/PorousSolid.h"
+#include "cementsph/scene/SimulatedCT.h"
+#include "cementsph/sph/Presets.h"
+#include "cementsph/sph/Simulation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace cementsph::scene {
+
+namespace {
+
+// The preset's model with the scene's overrides; h from the particle spacing.
+sph::ModelParameters modelParameters(const sph::ModelPreset& preset, const SceneConfig& scene) {
+  sph::ModelParameters m = preset.model;
+  if (scene.integrator) m.integrator = sph::parseIntegrator(*scene.integrator);
+  if (scene.dragCoefficient) m.dragCoefficient = *scene.dragCoefficient;
+  if (scene.soundSpeedMPerS) m.soundSpeed = *scene.soundSpeedMPerS;
+  m.fixedSums = scene.fixedSumMethod();
+  if (scene.fixedFieldSpacingOverH) m.fixedFieldSpacing = *scene.fixedFieldSpacingOverH;
+  // The overdamped step moves the fastest particle at most this fraction of h. The engine's 0.05 suits
+  // the Darcy box; in an injection the fastest particles are the few at the tip, and 0.05 to 0.5 gave
+  // the same cement to 0.01 mm of spreading on the phantom (VALIDATION.md), so 0.25: 4x fewer steps.
+  m.maxDisplacement = scene.maxDisplacementOverH.value_or(0.25);
+  if (scene.neighbourSkinOverH) m.neighbourSkin = *scene.neighbourSkinOverH;
+  m.smoothingLength = preset.hOverD * scene.spacingM();
+  return m;
+}
+
+struct BoneChoice {
+  std::string model, reason;
+};
+
+// The bone: pore-resolved (the paper's solid voxels) or a continuum from HU (BoneCalibration.h). Auto: a
+// continuum when the tip's voxel is above threshold_hu but not cortex, i.e. no pore is resolved there.
+BoneChoice chooseBone(const imaging::ImageType* ct, const SceneConfig& scene) {
+  BoneChoice b{scene.boneModel, "forced by the scene key bone_model"};
+  if (b.model != "auto") return b;
+  const Eigen::Vector3d tipMm = *scene.tipMm;
+  imaging::ImageType::PointType point;
+  for (unsigned a = 0; a < 3; ++a) point[a] = tipMm[int(a)];
+  imaging::ImageType::IndexType index;
+  b.model = "pore-resolved";
+  b.reason = "the tip's voxel is at or below threshold_hu: the CT resolves the pores (the paper's model)";
+  if (ct->TransformPhysicalPointToIndex(point, index)) {
+    const double hu = ct->GetPixel(index);
+    if (hu > scene.thresholdHu && hu <= scene.bone.corticalHu) {
+      b.model = "continuum";
+      std::ostringstream r;
+      r << "the tip's voxel is " << hu << " HU, above threshold_hu " << scene.thresholdHu << " HU and below cortical_hu "
+        << scene.bone.corticalHu << " HU: the CT does not resolve the pores there, so the bone is a continuum from HU";
+      b.reason = r.str();
+    }
+  }
+  return b;
+}
+
+// Outlet pressures from the series: final, largest, and the injection (syringe) pressure's largest.
+void summarisePressures(const std::vector<TipRecord>& series, InjectionSummary& s) {
+  if (series.empty()) return;
+  double maxTip = -std::numeric_limits<double>::infinity(), maxInjection = 0.0;
+  for (const TipRecord& r : series) {
+    maxTip = std::max(maxTip, r.tipPa);
+    maxInjection = std::max(maxInjection, r.tipPa + r.cannulaPa);
+  }
+  const double finalTip = std::isfinite(series.back().tipPa) ? series.back().tipPa : 0.0;
+  s.finalTipPressurePa = finalTip;
+  s.maxTipPressurePa = std::isfinite(maxTip) ? maxTip : 0.0;
+  s.cannulaPressureDropPa = series.back().cannulaPa;
+  s.injectionPressurePa = finalTip + series.back().cannulaPa;
+  s.maxInjectionPressurePa = maxInjection;
+}
+
+// The path of the first number in j that is NaN or infinite ("" if none).
+std::string firstNonFinite(const nlohmann::json& j, const std::string& path = "") {
+  if (j.is_number_float()) return std::isfinite(j.get<double>()) ? "" : path;
+  if (j.is_object())
+    for (const auto& [key, value] : j.items())
+      if (std::string bad = firstNonFinite(value, path.empty() ? key : path + "." + key); !bad.empty()) return bad;
+  if (j.is_array())
+    for (std::size_t i = 0; i < j.size(); ++i)
+      if (std::string bad = firstNonFinite(j[i], path + "[" + std::to_string(i) + "]"); !bad.empty()) return bad;
+  return "";
+}
+
+} // namespace
+
+InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConfig& scene, const InjectionRunOptions& o) {
+  scene.validate();
+  // Any orientation: an oblique CT is resampled onto an axis-aligned grid in its own patient frame.
+  const imaging::ImageType::ConstPointer aligned = axisAligned(input);
+  const imaging::ImageType* ct = aligned.GetPointer();
+  const auto wallStart = std::chrono::steady_clock::now();
+  const sph::ModelPreset preset = sph::modelPreset(scene.modelPreset);
+  InjectionSetup setup;
+  setup.ct = ct;
+  setup.scene = &scene;
+  setup.preset = &preset;
+  setup.model = modelParameters(preset, scene);
+  const BoneChoice bone = chooseBone(ct, scene);
+  setup.continuum = bone.model == "continuum";
+
+  PorousSolidOptions po;
+  po.thresholdHu = setup.continuum ? scene.bone.corticalHu : scene.thresholdHu; // continuum: only cortex is solid
+  po.roiSizeMm = scene.roiSizeMm;
+  po.reachMm = 2.0 * setup.model.smoothingLength * 1e3;
+  po.restDensity = setup.model.restDensity;
+  po.massFactor = scene.solidMassFactor;
+  po.requiredPoreVolumeMm3 = scene.volumeMl * 1e3;
+  const PorousSolid solid = buildPorousSolid(ct, *scene.tipMm, po);
+  setup.solid = &solid;
+  const double roiVoxels = double(solid.roiSize[0]) * double(solid.roiSize[1]) * double(solid.roiSize[2]);
+  const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
+  ModelChoice choice = chooseModel(scene, setup.model.restDensity, setup.model.soundSpeed, roiPorosity);
+  const InjectionModelRegistry::Entry& entry = InjectionModelRegistry::instance().at(choice.pressureModel);
+  choice.model = entry.description;
+  setup.choice = &choice;
+  setup.model.pressureModel = choice.pressureModel;
+  if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
+  if (o.progress) std::cerr << "inject: bone " << bone.model << ": " << bone.reason << "\n";
+
+  const std::unique_ptr<InjectionModel> model = entry.make();
+  model->start(setup);
+
+  const double rho0 = setup.model.restDensity;
+  const double hu = o.huPerRelativeDensity;
+  InjectionResult result;
+  InjectionSummary& s = result.summary;
+  auto volumeRecord = [&]() {
+    return nlohmann::json{{"time_s", model->time()}, {"volume_injected_ml", model->injectedVolumeM3() * 1e6},
+                          {"cement_volume_ml", model->cementVolumeM3() * 1e6}};
+  };
+  detail::InjectionWriter writer(o.outDir, scene, hu,
+                                 [&] { return simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0); });
+
+  // The loop: steps of at most the time to the next snapshot or the end.
+  const double T = scene.injectionDurationS();
+  const double endTime = T * (1 - 1e-12);
+  detail::InjectionProgress progress(o, wallStart, T);
+  double nextSnapshot = scene.snapshotIntervalS;
+  while (model->time() < endTime) {
+    double dtMax = T - model->time();
+    if (nextSnapshot - model->time() > 1e-9 * T) dtMax = std::min(dtMax, nextSnapshot - model->time());
+    model->advance(dtMax);
+    result.tipSeries.push_back(model->outlet());
+    // A surgeon stops at the first leak (1 mm^3 of cement outside bone).
+    if (scene.stopAtFirstLeak && model->leakedVolumeM3() > 1e-9) {
+      s.stoppedAtFirstLeak = s.stoppedEarly = true;
+      break;
+    }
+    if (model->time() >= nextSnapshot * (1 - 1e-12) && model->time() < endTime) {
+      s.volumeHistory.push_back(volumeRecord());
+      if (writer.writing()) writer.snapshot(model->time(), model->cement());
+      while (nextSnapshot <= model->time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
+    }
+    if (!progress.step(model->time(), [&] { return model->state(); })) {
+      s.stoppedEarly = true;
+      break;
+    }
+  }
+  model->finish(s.stoppedEarly);
+  progress.done();
+
+  // The summary: what the driver knows, then what the engine knows.
+  s.wallTimeS = progress.wallSeconds();
+  s.engine = choice.pressureModel;
+  s.model = choice.model;
+  s.modelReason = choice.reason;
+  s.recommendedPressureModel = choice.recommended;
+  s.dimensionlessNumbers = choice.numbersJson();
+  s.modelPreset = preset.name;
+  s.boneModel = bone.model;
+  s.boneModelReason = bone.reason;
+  s.ctOrientation = isAxisAligned(input) ? "axial" : axisPermutation(input) ? "reoriented" : "resampled";
+  s.ctResampled = s.ctOrientation == "resampled"; // a reorientation moves no value: nothing was interpolated
+  s.volumeRequestedMl = scene.volumeMl;
+  s.volumeInjectedMl = model->injectedVolumeM3() * 1e6;
+  s.cementVolumeMl = model->cementVolumeM3() * 1e6;
+  s.simulatedTimeS = model->time();
+  s.huPerRelativeDensity = hu;
+  for (int a = 0; a < 3; ++a) {
+    s.roiStart[std::size_t(a)] = solid.roiStart[std::size_t(a)];
+    s.roiSize[std::size_t(a)] = solid.roiSize[std::size_t(a)];
+  }
+  s.solidVoxelsTotal = solid.solidVoxels;
+  s.connectedPoreVoxels = solid.connectedPoreVoxels;
+  summarisePressures(result.tipSeries, s);
+  s.volumeHistory.push_back(volumeRecord()); // the final state
+  model->report(s, result.engineFigures);
+
+  result.particles = model->cement();
+  s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());
+  result.simulatedCt = simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0);
+  result.regionCt = simulatedCtOnRoi(ct, solid, {}, hu, rho0);
+  result.metrics = s.toJson();
+  result.metrics["provenance"] = provenance::toJson();
+  for (const auto& [key, value] : result.engineFigures.items()) {
+    if (result.metrics.contains(key))
+      throw std::logic_error("injection model \"" + s.engine + "\" reports \"" + key + "\", a key the driver owns");
+    result.metrics[key] = value;
+  }
+  // Not one non-finite figure goes out silently (JSON would write it as null): a run that made one failed.
+  if (const std::string bad = firstNonFinite(result.metrics); !bad.empty())
+    throw sph::SimulationError("inject: the run's figure " + bad + " is not a finite number (the run went wrong; "
+                               "try a smaller flow rate or particle radius, or report the scene)");
+  if (writer.writing()) model->writeFiles(o.outDir, result.simulatedCt);
+  writer.finish(model->time(), result.particles, result.simulatedCt, result.tipSeries, model->pressureBaselinePa(),
+                result.metrics);
+  return result;
+}
+
+} // namespace cementsph::scene

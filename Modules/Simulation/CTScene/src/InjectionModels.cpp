@@ -1,0 +1,16 @@
+// The built-in injection engines: one line each (InjectionModel.h). A new engine is a folder under
+// src/Models/ with a factory, and one line here.
+#include "cementsph/scene/InjectionModel.h"
+
+namespace cementsph::scene {
+
+std::unique_ptr<InjectionModel> makeParticleInjectionModel();   // src/Models/Particles
+std::unique_ptr<InjectionModel> makeVoxelDarcyInjectionModel(); // src/Models/VoxelDarcy
+
+void registerBuiltInInjectionModels(InjectionModelRegistry& r) {
+  r.add("voxel-darcy", makeVoxelDarcyInjectionModel, "incompressible-darcy-on-voxels");
+  r.add("incompressible", makeParticleInjectionModel, "incompressible-darcy-on-particles");
+  r.add("equation-of-state", makeParticleInjectionModel, "weakly-compressible");
+}
+
+} // namespace cementsph::scene

@@ -1,0 +1,471 @@
+// The voxel-grid Darcy filling (VoxelDarcyFilling.h) as an injection engine (InjectionModel.h), registered as
+// "voxel-darcy", the default for creeping flow. The cement is the filled voxels: its points
+// (particles_NNNN.vtp) are one per voxel that holds cement (its centre, mm, the CT's frame) with fill_fraction,
+// cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s, porosity, permeability_m2,
+// arrival_time_s, age_s, and as the particles' arrays velocity_m_per_s (the interstitial velocity q / phi) and
+// density_kg_per_m3 (rho0: incompressible). Also cement_labels.nrrd: a label map on the simulated CT's grid (1
+// cement in bone, 2 leaked cement), which `cementsph inject` draws as cement_slices.png (leaks in red) and 3D
+// Slicer opens as a segmentation.
+#include "cementsph/scene/InjectionModel.h"
+
+#include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/scene/BoneCalibration.h"
+#include "cementsph/scene/SimulatedCT.h"
+#include "cementsph/sph/HagenPoiseuille.h"
+#include "cementsph/sph/Simulation.h"
+#include "cementsph/sph/TubeFlow.h"
+#include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
+
+#include <itkImage.h>
+#include <itkSignedMaurerDistanceMapImageFilter.h>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+
+namespace cementsph::scene {
+
+using nlohmann::json;
+using voxeldarcy::VoxelDarcyFilling;
+using voxeldarcy::VoxelMedium;
+
+namespace {
+
+// The cannula's wall thickness [m] where the scene gives none: 11G regular wall, outer 3.048 mm against
+// inner 2.388 mm (ISO 9626).
+constexpr double kCannulaWallM = 0.33e-3;
+
+
+// Capillary entry pressure of each pore voxel [Pa]: Young-Laplace for the cement entering a pore of the
+// local radius r as the non-wetting phase (cos theta = 1, the largest entry pressure), p_e = 2 sigma / r.
+// r is the distance from the voxel's centre to the solid's surface: the Euclidean distance to the nearest
+// solid voxel centre (ITK's signed Maurer distance map, in mm) less half a voxel, at least half a voxel.
+std::vector<float> capillaryEntryPressure(const PorousSolid& solid, double tensionNPerM) {
+  using Mask = itk::Image<unsigned char, 3>;
+  using Distance = itk::Image<float, 3>;
+  auto mask = Mask::New();
+  Mask::RegionType region;
+  Mask::SizeType size;
+  for (unsigned a = 0; a < 3; ++a) size[a] = itk::SizeValueType(solid.grid.size[int(a)]);
+  region.SetSize(size);
+  mask->SetRegions(region);
+  Mask::SpacingType spacing;
+  for (unsigned a = 0; a < 3; ++a) spacing[a] = solid.grid.spacing[int(a)] * 1e3;
+  mask->SetSpacing(spacing);
+  mask->Allocate();
+  std::copy(solid.solid.begin(), solid.solid.end(), mask->GetBufferPointer());
+  const double half = 0.5 * solid.grid.spacing.minCoeff() * 1e3; // mm
+  std::vector<float> entry(solid.grid.count(), 0.0f);
+  if (solid.solidVoxels == 0) return entry; // no solid: no throats
+  auto distance = itk::SignedMaurerDistanceMapImageFilter<Mask, Distance>::New();
+  distance->SetInput(mask);
+  distance->SetBackgroundValue(0);
+  distance->SetInsideIsPositive(false);
+  distance->SetSquaredDistance(false);
+  distance->SetUseImageSpacing(true);
+  distance->Update();
+  const float* d = distance->GetOutput()->GetBufferPointer();
+  for (std::size_t c = 0; c < entry.size(); ++c) {
+    if (solid.solid[c]) continue;
+    const double rMm = std::max(double(d[c]) - half, half); // d: to the nearest solid voxel's centre
+    entry[c] = float(2.0 * tensionNPerM / (rMm * 1e-3));
+  }
+  return entry;
+}
+
+// Cement in soft tissue, by 6-connected site: volume-weighted centre (mm, the CT's frame), first arrival
+// (s) and volume (ml). Returns the total leaked volume [m^3].
+double leakage(const VoxelDarcyFilling& f, const std::vector<std::uint8_t>& softTissue, nlohmann::json* sites) {
+  const VoxelMedium& m = f.medium();
+  double total = 0;
+  std::vector<std::uint8_t> seen(softTissue.empty() ? 0 : m.count(), 0);
+  if (sites) *sites = nlohmann::json::array();
+  for (std::size_t c = 0; c < softTissue.size(); ++c) {
+    if (!softTissue[c] || f.fill()[c] <= 0 || seen[c]) continue;
+    double volume = 0, first = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    std::vector<std::size_t> stack{c};
+    seen[c] = 1;
+    while (!stack.empty()) {
+      const std::size_t v = stack.back();
+      stack.pop_back();
+      const double vol = f.fill()[v] * m.porosity[v] * m.voxelVolume();
+      volume += vol;
+      centre += vol * m.centre(v);
+      first = std::min(first, f.arrivalTime()[v]);
+      const auto ijk = m.ijk(v);
+      const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+      for (const auto& s : d) {
+        const int i = ijk[0] + s[0], j = ijk[1] + s[1], k = ijk[2] + s[2];
+        if (i < 0 || j < 0 || k < 0 || i >= m.size[0] || j >= m.size[1] || k >= m.size[2]) continue;
+        const std::size_t n = m.index(i, j, k);
+        if (softTissue[n] && f.fill()[n] > 0 && !seen[n]) {
+          seen[n] = 1;
+          stack.push_back(n);
+        }
+      }
+    }
+    total += volume;
+    if (sites) {
+      const Eigen::Vector3d mm = centre / volume * 1e3;
+      sites->push_back({{"position_mm", {mm.x(), mm.y(), mm.z()}}, {"first_time_s", first}, {"volume_ml", volume * 1e6}});
+    }
+  }
+  return total;
+}
+
+// One point per voxel holding cement.
+vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity) {
+  const VoxelMedium& m = f.medium();
+  std::vector<std::size_t> cells;
+  for (std::size_t c = 0; c < m.count(); ++c)
+    if (f.fill()[c] > 0) cells.push_back(c);
+  const vtkIdType n = vtkIdType(cells.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat(); // mm to 1e-4 of a 40 mm region; half the bytes of doubles
+  points->SetNumberOfPoints(n);
+  // Single precision (half the bytes to write a hundred times a run), but the fill and the volumes in double:
+  // they add up to the injected volume.
+  auto make = [n](const char* name, int components, bool doublePrecision = false) {
+    vtkSmartPointer<vtkDataArray> a;
+    if (doublePrecision) a = vtkSmartPointer<vtkDoubleArray>::New();
+    else a = vtkSmartPointer<vtkFloatArray>::New();
+    a->SetName(name);
+    a->SetNumberOfComponents(components);
+    a->SetNumberOfTuples(n);
+    return a;
+  };
+  auto fill = make("fill_fraction", 1, true), volume = make("cement_volume_mm3", 1, true), pressure = make("pressure_pa", 1),
+       velocity = make("darcy_velocity_m_per_s", 3), viscosity = make("viscosity_pa_s", 1),
+       porosity = make("porosity", 1), permeability = make("permeability_m2", 1), arrival = make("arrival_time_s", 1),
+       age = make("age_s", 1), speed = make("velocity_m_per_s", 3), density = make("density_kg_per_m3", 1);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  for (vtkIdType i = 0; i < n; ++i) {
+    const std::size_t c = cells[std::size_t(i)];
+    const Eigen::Vector3d x = m.centre(c) * 1e3;
+    points->SetPoint(i, x.x(), x.y(), x.z());
+    fill->SetTuple1(i, f.fill()[c]);
+    volume->SetTuple1(i, f.fill()[c] * m.porosity[c] * m.voxelVolume() * 1e9);
+    pressure->SetTuple1(i, f.pressure()[c]);
+    const Eigen::Vector3d q = f.darcyVelocity(c);
+    velocity->SetTuple3(i, q.x(), q.y(), q.z());
+    const Eigen::Vector3d v = q / double(m.porosity[c]); // the cement's own (interstitial) velocity
+    speed->SetTuple3(i, v.x(), v.y(), v.z());
+    density->SetTuple1(i, restDensity);
+    viscosity->SetTuple1(i, f.viscosity()[c]);
+    porosity->SetTuple1(i, m.porosity[c]);
+    permeability->SetTuple1(i, m.permeability[c]);
+    arrival->SetTuple1(i, f.arrivalTime()[c]);
+    age->SetTuple1(i, f.time() - f.arrivalTime()[c]);
+    verts->InsertNextCell(1, &i);
+  }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  for (auto* a : {fill.Get(), volume.Get(), pressure.Get(), velocity.Get(), viscosity.Get(), porosity.Get(),
+                  permeability.Get(), arrival.Get(), age.Get(), speed.Get(), density.Get()})
+    poly->GetPointData()->AddArray(a);
+  return poly;
+}
+
+// The voxel-grid Darcy filling as an injection engine.
+class VoxelDarcyInjectionModel final : public InjectionModel {
+public:
+  void start(const InjectionSetup& in) override {
+    const SceneConfig& scene = *in.scene;
+    scene_ = &scene;
+    solid_ = in.solid;
+    continuum_ = in.continuum;
+    rho0_ = in.model.restDensity;
+    tip_ = *scene.tipMm * 1e-3;
+    axis_ = scene.direction.normalized();
+    innerDiameter_ = scene.cannulaInnerDiameterMm * 1e-3;
+    cannulaLength_ = scene.cannulaLengthMm * 1e-3;
+    flowRate_ = scene.flowRateM3PerS();
+    T_ = scene.injectionDurationS();
+    const PorousSolid& solid = *solid_;
+
+    // The medium: the CT's pore voxels open, its solid voxels closed. A resolved pore voxel has the
+    // permeability of the model preset's drag in open space, k0 = h^5 / (Cf d^3) (model-notes 3: the
+    // paper's Eq. 9 resistance with no solid near), unless the scene gives pore_permeability_m2.
+    const double d = scene.spacingM(), h = in.model.smoothingLength;
+    poreK_ = scene.porePermeabilityM2.value_or(std::pow(h, 5) / (in.model.dragCoefficient * d * d * d));
+    if (!(poreK_ >= 1e-18 && poreK_ <= 1e-3))
+      throw std::invalid_argument("scene: the pore permeability k0 = h^5 / (Cf d^3) = " + std::to_string(poreK_) +
+                                  " m^2 from particle_radius_mm and the preset is outside 1e-18 .. 1e-3 m^2 (give "
+                                  "pore_permeability_m2, or a particle radius of a pore's scale)");
+    VoxelMedium medium;
+    medium.size = solid.grid.size;
+    medium.origin = solid.grid.origin;
+    medium.spacing = solid.grid.spacing;
+    medium.porosity.assign(medium.count(), 1.0f);
+    medium.permeability.assign(medium.count(), poreK_);
+    if (continuum_) {
+      // Each voxel's porosity and permeability from its HU (BoneCalibration.h); soft tissue is where cement leaks.
+      softTissue_.assign(medium.count(), 0);
+      const auto start = in.ct->GetLargestPossibleRegion().GetIndex();
+      for (std::size_t c = 0; c < medium.count(); ++c) {
+        const auto v = medium.ijk(c);
+        imaging::ImageType::IndexType idx;
+        for (unsigned a = 0; a < 3; ++a) idx[a] = start[a] + solid.roiStart[a] + v[a];
+        const double hu = in.ct->GetPixel(idx);
+        medium.porosity[c] = float(scene.bone.porosity(hu));
+        medium.permeability[c] = scene.bone.permeability(hu);
+        softTissue_[c] = scene.bone.tissue(hu) == BoneCalibration::Tissue::SoftTissue;
+      }
+    } else {
+      for (std::size_t c = 0; c < medium.count(); ++c)
+        if (solid.solid[c]) medium.porosity[c] = 0.0f;
+    }
+    closeShaft(medium);
+    sourceRadius_ = std::max(0.5 * innerDiameter_, 0.5 * solid.grid.spacing.minCoeff());
+
+    filling_ = std::make_unique<VoxelDarcyFilling>(std::move(medium));
+    filling_->setSource(tip_, sourceRadius_);
+    if (scene.capillaryTensionNPerM > 0)
+      filling_->setEntryPressure(capillaryEntryPressure(solid, scene.capillaryTensionNPerM));
+    viscosity_ = scene.viscositySchedule();
+    // The cement's law: Newtonian (the schedule) or shear-thinning, times the curing factor.
+    shearThinning_ = scene.viscosityLaw != "newtonian";
+    law_ = sph::makeRheology(scene.viscosityLaw, scene.rheology);
+    lower_ = scene.rheology.minimumViscosityPaS;
+    upper_ = scene.rheology.maximumViscosityPaS;
+    // The second tip's start (never, with one tip).
+    secondTipStart_ = scene.hasSecondTip() ? scene.secondTipStartS() : 2 * T_;
+    atSecondTip_ = !scene.hasSecondTip();
+  }
+
+  double time() const override { return filling_->time(); }
+
+  void advance(double dtMax) override {
+    const SceneConfig& scene = *scene_;
+    const double t = filling_->time();
+    const double factor = scene.curingFactor(t);
+    const double mu = std::clamp(factor * viscosity_->at(t), lower_, upper_);
+    if (shearThinning_) {
+      const auto law = law_;
+      const double lower = lower_, upper = upper_;
+      filling_->setShearRateViscosity(
+          [law, factor, lower, upper](double g) { return std::clamp(factor * law->unbounded(g), lower, upper); },
+          law->flowIndex(), 3);
+    } else {
+      filling_->setViscosity(mu);
+    }
+    // At most 1 % of the injection per step: progress every 1 % and a tip-pressure curve with 100 points.
+    dtMax = std::min(dtMax, 0.01 * T_);
+    if (!atSecondTip_ && secondTipStart_ - t > 1e-9 * T_) dtMax = std::min(dtMax, secondTipStart_ - t);
+    try {
+      filling_->step(flowRate_, dtMax);
+    } catch (const voxeldarcy::FillingError& e) {
+      throw sph::SimulationError(e.what()); // a failed run, as an unstable particle run
+    }
+    if (!atSecondTip_ && filling_->time() >= secondTipStart_ * (1 - 1e-12)) {
+      // The cannula is withdrawn: its tract opens, and the outlet is the second tip from now on.
+      filling_->openVoxels(tractVoxels_, tractPorosity_, tractPermeability_);
+      try {
+        filling_->setSource(tip_ - withdrawal_ * axis_, sourceRadius_);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("scene: the second tip, second_tip_withdrawal_mm back along the axis: " +
+                                    std::string(e.what()));
+      }
+      atSecondTip_ = true;
+    }
+    outlet_ = {filling_->time(), filling_->sourcePressure(), cannulaDrop(factor, mu)};
+  }
+
+  TipRecord outlet() const override { return outlet_; }
+  double injectedVolumeM3() const override { return filling_->injectedVolume(); }
+  double cementVolumeM3() const override { return filling_->cementVolume(); }
+  double leakedVolumeM3() const override { return softTissue_.empty() ? 0.0 : leakage(*filling_, softTissue_, nullptr); }
+
+  std::string state() const override {
+    return std::to_string(filling_->statistics().lastUnknowns) + " filled voxels, " +
+           std::to_string(filling_->statistics().steps) + " steps";
+  }
+
+  // kg/m^3 of cement per ROI voxel (its filled pore fraction at rho0).
+  std::vector<double> cementDensity() const override {
+    std::vector<double> rho(filling_->medium().count(), 0.0);
+    for (std::size_t c = 0; c < rho.size(); ++c) rho[c] = filling_->fill()[c] * filling_->medium().porosity[c] * rho0_;
+    return rho;
+  }
+
+  vtkSmartPointer<vtkPolyData> cement() const override { return cementVoxelsToPolyData(*filling_, rho0_); }
+
+  void report(InjectionSummary& s, json& e) const override {
+    const SceneConfig& scene = *scene_;
+    const VoxelDarcyFilling& filling = *filling_;
+    const VoxelMedium& m = filling.medium();
+    double spread = 0, held = 0;
+    std::size_t cementVoxels = 0;
+    for (std::size_t c = 0; c < m.count(); ++c) {
+      const double v = filling.fill()[c] * m.porosity[c];
+      if (v <= 0) continue;
+      ++cementVoxels;
+      spread += v * (m.centre(c) - tip_).norm();
+      held += v;
+    }
+    if (held > 0) spread /= held;
+    const std::size_t sourceVoxels = filling.sourceVoxels().size();
+    double porosityAtTip = 0, permeabilityAtTip = 0;
+    for (std::size_t c : filling.sourceVoxels()) {
+      porosityAtTip += m.porosity[c] / double(sourceVoxels);
+      permeabilityAtTip += m.permeability[c] / double(sourceVoxels);
+    }
+    const auto& st = filling.statistics();
+    s.steps = st.steps;
+    s.solidVoxelsKept = solid_->solidVoxels; // every solid voxel of the region is a closed voxel
+    s.resistance = continuum_                   ? "continuum permeability from HU (Kozeny-Carman)"
+                   : scene.porePermeabilityM2 ? "pore-permeability (scene)"
+                                              : "pore-permeability (preset drag k0)";
+    s.viscosityLaw = scene.viscosityLaw;
+    s.pressureIsPhysical = true;
+    s.meanSpreadingDistanceMm = spread * 1e3;
+    s.massBalanceError = filling.injectedVolume() > 0
+                             ? (filling.injectedVolume() - filling.cementVolume()) / filling.injectedVolume()
+                             : 0.0;
+    s.fluidInSolidFraction = 0.0; // closed voxels never take cement
+    s.finalViscosityPaS = std::clamp(scene.curingFactor(filling.time()) * viscosity_->at(filling.time()), lower_, upper_);
+    s.leakageAssessed = continuum_; // a pore-resolved CT has no soft tissue class: not assessed
+    if (continuum_) {
+      json sites;
+      s.leakageVolumeMl = leakage(filling, softTissue_, &sites) * 1e6;
+      for (const json& site : sites)
+        s.leakageSites.push_back({site.at("position_mm").get<std::array<double, 3>>(), site.at("first_time_s").get<double>(),
+                                  site.at("volume_ml").get<double>(), "soft-tissue"});
+      e["bone_calibration"] = {{"marrow_hu", scene.bone.marrowHu},
+                               {"bone_tissue_hu", scene.bone.boneTissueHu},
+                               {"kozeny_carman_diameter_mm", scene.bone.kozenyCarmanDiameterMm},
+                               {"cortical_hu", scene.bone.corticalHu},
+                               {"soft_tissue_max_hu", scene.bone.softTissueMaxHu},
+                               {"soft_tissue_permeability_m2", scene.bone.softTissuePermeabilityM2}};
+    }
+
+    if (scene.hasSecondTip()) {
+      const Eigen::Vector3d second = scene.secondTipMm();
+      e["second_tip_mm"] = {second.x(), second.y(), second.z()};
+      e["second_tip_start_s"] = secondTipStart_;
+      e["second_tip_volume_ml"] = scene.secondTipVolumeMl;
+    }
+    e["cement_voxels"] = cementVoxels;
+    e["cannula_shaft_voxels_closed"] = shaftVoxels_;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (std::size_t c = 0; c < m.count(); ++c)
+      if (filling.filled(c)) {
+        lo = std::min(lo, filling.viscosity()[c]);
+        hi = std::max(hi, filling.viscosity()[c]);
+      }
+    e["apparent_viscosity_min_pa_s"] = std::isfinite(lo) ? lo : 0.0;
+    e["apparent_viscosity_max_pa_s"] = hi;
+    e["curing_factor_at_end"] = scene.curingFactor(filling.time());
+    e["curing_factor_at_start"] = scene.curingFactor(0.0);
+    e["curing_model"] = scene.curing().kind();
+    e["pore_permeability_m2"] = poreK_;
+    e["porosity_at_tip"] = porosityAtTip;
+    e["permeability_at_tip_m2"] = permeabilityAtTip;
+    addPressureSolverFigures(e, st.solves, st.iterations, st.worstResidual, st.unconverged, st.solveSeconds);
+    e["pressure_assembly_wall_s"] = st.assemblySeconds;
+    e["front_voxels"] = st.lastFrontVoxels;
+    e["capillary_tension_n_per_m"] = scene.capillaryTensionNPerM;
+    e["capillary_entry"] = scene.capillaryTensionNPerM > 0;
+    e["capillary_solve_rounds"] = st.capillaryRounds;
+    e["outlet_source_radius_mm"] = sourceRadius_ * 1e3;
+    e["outlet_source_voxels"] = sourceVoxels;
+  }
+
+  // cement_labels.nrrd on the simulated CT's grid (a label map for 3D Slicer and the cement picture): 1 where
+  // cement fills at least half a voxel's pores in bone, 2 where any cement is outside bone.
+  void writeFiles(const std::string& outDir, const imaging::ImageType* simCt) const override {
+    const VoxelMedium& m = filling_->medium();
+    auto labels = imaging::MaskType::New();
+    labels->CopyInformation(simCt);
+    labels->SetRegions(simCt->GetLargestPossibleRegion());
+    labels->Allocate();
+    std::uint8_t* l = labels->GetBufferPointer();
+    for (std::size_t c = 0; c < m.count(); ++c) {
+      const bool leaked = !softTissue_.empty() && softTissue_[c] && filling_->fill()[c] > 0;
+      l[c] = leaked ? 2 : filling_->fill()[c] >= 0.5 ? 1 : 0;
+    }
+    imaging::writeMask(labels, (std::filesystem::path(outDir) / "cement_labels.nrrd").string());
+  }
+
+private:
+  // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it): voxels more
+  // than half a voxel behind the outlet plane, so that the voxel holding the tip stays open wherever the tip
+  // falls within it. With a second tip, the stretch of the shaft between the two outlets opens when the
+  // cannula is withdrawn: those voxels, with their own porosity and permeability.
+  void closeShaft(VoxelMedium& medium) {
+    if (!scene_->cannulaWall) return;
+    withdrawal_ = scene_->hasSecondTip() ? *scene_->secondTipWithdrawalMm * 1e-3 : 0.0;
+    const double outer = 0.5 * innerDiameter_ + kCannulaWallM;
+    const double behind = 0.5 * solid_->grid.spacing.maxCoeff();
+    for (std::size_t c = 0; c < medium.count(); ++c) {
+      const Eigen::Vector3d r = medium.centre(c) - tip_;
+      const double s = r.dot(axis_);
+      if (s < -behind && s >= -cannulaLength_ && (r - s * axis_).norm() <= outer && medium.porosity[c] > 0) {
+        if (withdrawal_ > 0 && s + withdrawal_ >= -behind) {
+          tractVoxels_.push_back(c);
+          tractPorosity_.push_back(medium.porosity[c]);
+          tractPermeability_.push_back(medium.permeability[c]);
+        }
+        medium.porosity[c] = 0.0f;
+        ++shaftVoxels_;
+      }
+    }
+  }
+
+  // The cannula's pressure drop [Pa]: Hagen-Poiseuille (Eq. 13) or, shear-thinning, the tube integral
+  // (Rabinowitsch-Mooney), once per curing factor (the general integral takes ~20 ms).
+  double cannulaDrop(double factor, double mu) {
+    const SceneConfig& scene = *scene_;
+    if (!shearThinning_) return sph::hagenPoiseuillePressureDrop(mu, cannulaLength_, flowRate_, innerDiameter_);
+    if (factor != cachedFactor_) {
+      if (scene.viscosityLaw == "power-law") {
+        cachedCannula_ = sph::powerLawTubePressureDrop(factor * scene.rheology.consistencyPaSn, scene.rheology.flowIndex,
+                                                       cannulaLength_, flowRate_, innerDiameter_);
+      } else {
+        sph::RheologyParameters p = scene.rheology;
+        p.zeroShearViscosityPaS *= factor;
+        p.infiniteShearViscosityPaS *= factor;
+        cachedCannula_ = sph::tubePressureDrop(*sph::makeRheology(scene.viscosityLaw, p), cannulaLength_, flowRate_,
+                                               innerDiameter_);
+      }
+      cachedFactor_ = factor;
+    }
+    return cachedCannula_;
+  }
+
+  const SceneConfig* scene_ = nullptr;
+  const PorousSolid* solid_ = nullptr;
+  bool continuum_ = false, shearThinning_ = false, atSecondTip_ = true;
+  double rho0_ = 0, innerDiameter_ = 0, cannulaLength_ = 0, flowRate_ = 0, T_ = 0, poreK_ = 0, sourceRadius_ = 0;
+  double lower_ = 0, upper_ = 0, secondTipStart_ = 0, withdrawal_ = 0;
+  double cachedFactor_ = -1, cachedCannula_ = 0;
+  Eigen::Vector3d tip_, axis_;
+  std::vector<std::uint8_t> softTissue_; // continuum: voxels outside bone, where cement is leakage
+  std::size_t shaftVoxels_ = 0;
+  std::vector<std::size_t> tractVoxels_;
+  std::vector<float> tractPorosity_;
+  std::vector<double> tractPermeability_;
+  std::unique_ptr<VoxelDarcyFilling> filling_;
+  std::optional<sph::ViscositySchedule> viscosity_;
+  std::shared_ptr<const sph::Rheology> law_;
+  TipRecord outlet_{0, 0, 0};
+};
+
+} // namespace
+
+std::unique_ptr<InjectionModel> makeVoxelDarcyInjectionModel() { return std::make_unique<VoxelDarcyInjectionModel>(); }
+
+} // namespace cementsph::scene
