@@ -354,3 +354,82 @@ TEST_F(InputFuzz, FailedWriteLeavesNoPartialFileAndStaleOutputsGo) {
 }
 
 } // namespace
+
+// Issue 21: every header field that carries a number, in each text format, set in turn to each hostile
+// value (NaN, infinities, zero, negatives, overflow, underflow, a printf conversion, text, a huge number);
+// and NIfTI's binary fields likewise. Oracle: the suite's clean outcome (exit 0 or exactly one line naming
+// the file, never a signal or a hang), no library text on stderr, and no output folder left after exit 1.
+TEST_F(InputFuzz, EveryNumericHeaderFieldWithHostileValues) {
+  const auto ct = smallCt();
+  const fs::path mha = dir_ / "field.mha", nrrd = dir_ / "field.nrrd", nii = dir_ / "field.nii";
+  cementsph::imaging::writeVolume(ct, mha.string(), false);
+  cementsph::imaging::writeVolume(ct, nrrd.string(), false);
+  cementsph::imaging::writeVolume(ct, nii.string(), false);
+  const std::vector<std::string> hostile{"nan", "inf", "-inf", "0", "-1", "1e300", "1e-300", "%n%s", "abc",
+                                         "99999999999999999999"};
+  auto check = [&](const fs::path& p, const std::string& label) {
+    fs::remove_all(dir_ / "drr-out");
+    const ProgramRun r = drr(p);
+    expectCleanOutcome(r, p.string(), label);
+    for (const char* library : {"itk::", "0x", "teem", "MetaIO", "MetaImage:", "nifti_", "ITK ERROR"})
+      EXPECT_EQ(r.err.find(library), std::string::npos) << label << ": " << r.err;
+    if (r.exitCode == 1) {
+      EXPECT_FALSE(fs::exists(dir_ / "drr-out" / "drr.nrrd")) << label;
+    }
+  };
+  // Text headers: replace the value of one "key = value" (MetaImage) or "key: value" (NRRD) line.
+  for (const auto& [file, separator] : {std::pair{mha, std::string(" = ")}, std::pair{nrrd, std::string(": ")}}) {
+    const std::string bytes = readBytes(file);
+    const std::size_t headerEnd = file == mha ? bytes.find("ElementDataFile") : bytes.find("\n\n");
+    ASSERT_NE(headerEnd, std::string::npos);
+    std::size_t lineStart = bytes.find('\n') + 1; // the first line: ObjectType or the NRRD magic
+    while (lineStart < headerEnd) {
+      const std::size_t lineEnd = bytes.find('\n', lineStart);
+      const std::string line = bytes.substr(lineStart, lineEnd - lineStart);
+      const std::size_t at = line.find(separator);
+      const std::string key = at == std::string::npos ? "" : line.substr(0, at);
+      const bool numeric = at != std::string::npos && line.find_first_of("0123456789", at) != std::string::npos;
+      if (numeric && key != "ElementDataFile") {
+        for (const std::string& value : hostile) {
+          // One number of the value replaced (the first), so a vector keeps its form.
+          std::string b = bytes;
+          const std::size_t digit = lineStart + line.find_first_of("-0123456789", at + separator.size());
+          const std::size_t digitsEnd = b.find_first_not_of("-+.0123456789e", digit);
+          b.replace(digit, digitsEnd - digit, value);
+          const fs::path p = dir_ / ("mutant" + file.extension().string());
+          writeBytes(p, b);
+          check(p, file.filename().string() + " " + key + " -> " + value);
+        }
+      }
+      lineStart = lineEnd + 1;
+    }
+  }
+  // NIfTI-1: float fields (pixdim 76.., vox_offset 108, scl 112/116, quatern 256.., srow 280..) and short
+  // fields (dim 40.., datatype 70, qform/sform codes 252/254).
+  const std::string bytes = readBytes(nii);
+  const float floats[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), 0.0f,
+                          -1.0f, 1e30f, 1e-30f};
+  std::vector<std::size_t> floatFields{108, 112, 116};
+  for (std::size_t at = 76; at < 108; at += 4) floatFields.push_back(at);
+  for (std::size_t at = 256; at < 328; at += 4) floatFields.push_back(at);
+  for (std::size_t field : floatFields)
+    for (float v : floats) {
+      std::string b = bytes;
+      const std::int16_t on = 1;
+      std::memcpy(&b[252], &on, 2); // qform and sform in use, so their numbers count
+      std::memcpy(&b[254], &on, 2);
+      std::memcpy(&b[field], &v, 4);
+      const fs::path p = dir_ / "mutant.nii";
+      writeBytes(p, b);
+      check(p, "nii float at " + std::to_string(field) + " -> " + std::to_string(v));
+    }
+  const std::int16_t shorts[] = {-1, 0, 8, 32767, -32768};
+  for (std::size_t field : {40u, 42u, 44u, 46u, 70u, 72u, 252u, 254u})
+    for (std::int16_t v : shorts) {
+      std::string b = bytes;
+      std::memcpy(&b[field], &v, 2);
+      const fs::path p = dir_ / "mutant.nii";
+      writeBytes(p, b);
+      check(p, "nii short at " + std::to_string(field) + " -> " + std::to_string(v));
+    }
+}
