@@ -144,7 +144,7 @@ TEST(HostileMetaImage, DataFilePatternsThatCrashOrMisreadAreRefused) {
   for (const char* pattern : {"s%02d.raw 1 5 0", "s%02d.raw 1 5 -1", "s%02d.raw 5 1 1", "s%02d.raw 1 5 2",
                               "s%02d.raw 1 9 1", "s%s.raw 1 5 1", "s%02d%d.raw 1 5 1", "s%n%02d.raw 1 5 1",
                               "s%999d.raw 1 5 1", "s%ld.raw 1 5 1", "s%02d.raw", "s%02d.raw 1 x 1",
-                              "s%02d.raw 1 99999999999 1"})
+                              "s%02d.raw 1 99999999999 1", "s%02d.raw 1 5 1 2"})
     expectRefused(metaCase(dir, "p.mhd", "", pattern), "ElementDataFile");
   // A pattern naming a file that is not there.
   expectRefused(metaCase(dir, "p.mhd", "", "t%02d.raw 1 5 1"), "t01.raw");
@@ -209,7 +209,8 @@ TEST(HostileNrrd, SpacingsAndDirectionsOutsideTheirRangeAreRefused) {
   for (const char* d : {"space directions: (1e200,1e200,0) (0,0.5,0) (0,0,0.5)",
                         "space directions: (nan,0,0) (0,0.5,0) (0,0,0.5)", "space directions: (0,0,0) (0,0.5,0) (0,0,0.5)",
                         "space directions: (1e-200,1e-200,0) (0,0.5,0) (0,0,0.5)",
-                        "space directions: (0.5,0,0) (0,inf,0) (0,0,0.5)", "space directions: (0.5,0,0) (0,0.5,0) (0,0,x)"})
+                        "space directions: (0.5,0,0) (0,inf,0) (0,0,0.5)", "space directions: (0.5,0,0) (0,0.5,0) (0,0,x)",
+                        "space directions: (0.5,0,0) (0,0.5,0) none"})
     expectRefused(nrrd(std::string("space: left-posterior-superior\n") + d), "space directions");
   expectRefused(nrrd("space: left-posterior-superior\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,0.5)\n"
                      "space origin: (nan,0,0)"),

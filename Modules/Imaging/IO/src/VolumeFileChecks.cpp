@@ -440,6 +440,11 @@ void checkMetaHeader(const std::string& path) {
         refuse(path, "data file " + shownValue(name) + " is missing; put it beside the header or fix the list");
     }
   } else if (dataFile.find('%') != std::string::npos) {
+    // MetaIO reads a fifth word as part of a file name with blanks and then takes other words for
+    // first and step than these: such a pattern is not read the way it looks.
+    if (w.size() > 4)
+      refuse(path, "ElementDataFile = " + shownValue(dataFile) + ": a pattern is 'name%03d.raw first last step' "
+                   "(no blanks in the name); rename the files");
     for (const std::string& name : patternFiles(path, "ElementDataFile", dataFile, w, size[2], false)) {
       std::error_code ec;
       if (!fs::is_regular_file(besideHeader(path, name), ec))
@@ -590,7 +595,11 @@ void checkNrrdHeader(const std::string& path) {
     }
   if (const auto v = field({"space directions"}))
     for (const auto& d : nrrdVectors(path, "space directions", *v)) {
-      if (!d) continue; // "none": a non-spatial axis (refused later: a CT has one value per voxel)
+      // "none" marks a non-spatial axis; all three of a CT's axes are spatial (the reader would give a
+      // "none" axis 1 mm).
+      if (!d)
+        refuse(path, "space directions: " + shownValue(*v) + " has an axis that is 'none' (not spatial); a CT's three "
+                     "axes all have a direction");
       for (double x : *d)
         if (!std::isfinite(x)) refuse(path, "space directions: " + shownValue(*v) + " is not finite (damaged header?)");
       requireSpacing(path, "space directions: a direction of length", scaledNorm(d->data(), int(d->size())));
