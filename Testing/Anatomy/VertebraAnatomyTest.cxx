@@ -274,6 +274,25 @@ TEST(VertebraAnatomy, APermutedGridGivesTheSameClasses) {
   EXPECT_EQ(differ, 0u);
 }
 
+// Marrow fat open to a gap of the cortex is still bone: on a copy of the CT, fat (-30 HU) in a 4 mm ball whose
+// posterior pole reaches the basivertebral foramen (centre 11 mm behind the body's centre, at mid height; written
+// into every voxel of the ball that is not cortex, > 350 HU). In 3-D the fat reaches the canal through the
+// foramen; the sagittal and coronal slices close it. Every voxel wholly inside the ball is the target.
+TEST(VertebraAnatomy, MarrowFatAgainstTheForamenIsStillBone) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  const P f{t.c[0], t.c[1] + 11, t.c[2]};
+  auto inBall = [&](const P& p) { return std::hypot(p[0] - f[0], p[1] - f[1], p[2] - f[2]) <= 4; };
+  std::vector<float> hu = s.hu;
+  s.forEach([&](std::size_t n, const P& p, const std::array<P, 8>&) {
+    if (inBall(p) && hu[n] <= 350 && p[1] < t.c[1] + kB - 0.5) hu[n] = -30;
+  });
+  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), s.grid, t.c, s.ao);
+  const Count c = count(a, inBall, TissueClass::TargetVertebra);
+  EXPECT_GT(c.inside, 60u); // 4/3 pi 4^3 / 1.5 mm^3 = 179 voxels less the shell
+  EXPECT_EQ(c.right, c.inside);
+}
+
 // (b) The disc spaces are disc: >= 95 % of the voxels wholly inside each analytic disc (the body's elliptic
 // section between the end plates; the shell of partial volume against the end plates and the edge left out).
 TEST(VertebraAnatomy, TheDiscSpacesAreDisc) {

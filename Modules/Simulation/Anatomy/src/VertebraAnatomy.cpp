@@ -121,6 +121,52 @@ Mask fillHoles3D(const Lattice& L, const Mask& m) {
   return filled;
 }
 
+// The holes of `m` in each slice across index axis `a`: the 4-connected regions of pixels not in `m` that do
+// not reach the slice's border; f(voxels) for each. Slices without any voxel of `m` are skipped.
+template <class F> void forEachHole2D(const Lattice& L, const Mask& m, int a, F&& f) {
+  const int u = a == 0 ? 1 : 0, w = a == 2 ? 1 : 2;
+  const int dims[3] = {L.nx, L.ny, L.nz};
+  const int nu = dims[u], nw = dims[w];
+  std::vector<std::uint8_t> seen(std::size_t(nu) * std::size_t(nw));
+  for (int s = 0; s < dims[a]; ++s) {
+    auto at = [&](int p, int q) {
+      int c[3];
+      c[a] = s;
+      c[u] = p;
+      c[w] = q;
+      return L.at(c[0], c[1], c[2]);
+    };
+    bool any = false;
+    for (int p = 0; p < nu && !any; ++p)
+      for (int q = 0; q < nw && !any; ++q) any = m[at(p, q)] != 0;
+    if (!any) continue;
+    std::fill(seen.begin(), seen.end(), std::uint8_t(0));
+    for (int p0 = 0; p0 < nu; ++p0)
+      for (int q0 = 0; q0 < nw; ++q0) {
+        if (m[at(p0, q0)] || seen[std::size_t(p0) * std::size_t(nw) + std::size_t(q0)]) continue;
+        std::vector<std::pair<int, int>> stack{{p0, q0}};
+        std::vector<std::size_t> pix;
+        seen[std::size_t(p0) * std::size_t(nw) + std::size_t(q0)] = 1;
+        bool border = false;
+        while (!stack.empty()) {
+          const auto [p, q] = stack.back();
+          stack.pop_back();
+          pix.push_back(at(p, q));
+          if (p == 0 || q == 0 || p == nu - 1 || q == nw - 1) border = true;
+          const int nb[4][2] = {{p + 1, q}, {p - 1, q}, {p, q + 1}, {p, q - 1}};
+          for (const auto& e : nb) {
+            if (e[0] < 0 || e[1] < 0 || e[0] >= nu || e[1] >= nw) continue;
+            const std::size_t key = std::size_t(e[0]) * std::size_t(nw) + std::size_t(e[1]);
+            if (seen[key] || m[at(e[0], e[1])]) continue;
+            seen[key] = 1;
+            stack.push_back({e[0], e[1]});
+          }
+        }
+        if (!border) f(pix);
+      }
+  }
+}
+
 // The index axis nearest patient z (the spine's axis, assumed within 45 degrees of it).
 int spineAxis(const Grid& g) {
   int best = 2;
@@ -439,6 +485,17 @@ Anatomy classifyAnatomyFromCT(const float* hu, const Grid& grid, const std::arra
     const Mask grown = dilateBox(L, core, r1);
     for (std::size_t v = 0; v < L.n; ++v) body[v] = core[v] || (grown[v] && (band[v] || cortex[v])) ? 1 : 0;
     body = fillHoles3D(L, body);
+    // Marrow that reaches a gap of the cortex (fat against the basivertebral foramen, a fracture) is open in
+    // 3-D; it is still bone where the body encloses it in a sagittal or a coronal slice (the slices along the
+    // spine: in an axial slice the vertebral foramen, the canal, is enclosed too, so axial slices are not used).
+    for (int a = 0; a < 3; ++a) {
+      if (a == ax) continue;
+      Mask add(L.n, 0);
+      forEachHole2D(L, body, a, [&](const std::vector<std::size_t>& hole) {
+        for (auto v : hole) add[v] = 1;
+      });
+      for (std::size_t v = 0; v < L.n; ++v) body[v] = body[v] || add[v] ? 1 : 0;
+    }
     // The target: the body, the cortex 26-connected to it within its axial extent +- 2 mm (posterior elements;
     // beyond that, facets and ribs touching a neighbour are not followed), and the rim of band voxels on it.
     int lo = std::numeric_limits<int>::max(), hi = -1;
@@ -535,54 +592,11 @@ Anatomy classifyAnatomyFromCT(const float* hu, const Grid& grid, const std::arra
   Mask canal(L.n, 0);
   if (!core.empty()) {
     const int u = ax == 0 ? 1 : 0, w = ax == 2 ? 1 : 2;
-    const int dims[3] = {L.nx, L.ny, L.nz};
     const double pixelMm2 = grid.spacingMm[std::size_t(u)] * grid.spacingMm[std::size_t(w)];
-    const int nu = dims[u], nw = dims[w];
-    std::vector<int> seen(std::size_t(nu) * std::size_t(nw));
-    for (int s = 0; s < dims[ax]; ++s) {
-      auto at = [&](int p, int q) {
-        int c[3];
-        c[ax] = s;
-        c[u] = p;
-        c[w] = q;
-        return L.at(c[0], c[1], c[2]);
-      };
-      bool any = false;
-      for (int p = 0; p < nu && !any; ++p)
-        for (int q = 0; q < nw; ++q)
-          if (target[at(p, q)]) {
-            any = true;
-            break;
-          }
-      if (!any) continue;
-      std::fill(seen.begin(), seen.end(), 0);
-      // Regions of non-target pixels; those touching the slice's border are outside.
-      int id = 0;
-      for (int p0 = 0; p0 < nu; ++p0)
-        for (int q0 = 0; q0 < nw; ++q0) {
-          if (target[at(p0, q0)] || seen[std::size_t(p0) * std::size_t(nw) + std::size_t(q0)]) continue;
-          ++id;
-          std::vector<std::pair<int, int>> stack{{p0, q0}}, pix;
-          seen[std::size_t(p0) * std::size_t(nw) + std::size_t(q0)] = id;
-          bool border = false;
-          while (!stack.empty()) {
-            const auto [p, q] = stack.back();
-            stack.pop_back();
-            pix.emplace_back(p, q);
-            if (p == 0 || q == 0 || p == nu - 1 || q == nw - 1) border = true;
-            const int nb[4][2] = {{p + 1, q}, {p - 1, q}, {p, q + 1}, {p, q - 1}};
-            for (const auto& e : nb) {
-              if (e[0] < 0 || e[1] < 0 || e[0] >= nu || e[1] >= nw) continue;
-              const std::size_t key = std::size_t(e[0]) * std::size_t(nw) + std::size_t(e[1]);
-              if (seen[key] || target[at(e[0], e[1])]) continue;
-              seen[key] = id;
-              stack.push_back({e[0], e[1]});
-            }
-          }
-          if (border || double(pix.size()) * pixelMm2 < o.minCanalAreaMm2) continue;
-          for (const auto& [p, q] : pix) canal[at(p, q)] = 1;
-        }
-    }
+    forEachHole2D(L, target, ax, [&](const std::vector<std::size_t>& hole) {
+      if (double(hole.size()) * pixelMm2 < o.minCanalAreaMm2) return;
+      for (auto v : hole) canal[v] = 1;
+    });
     for (std::size_t v = 0; v < L.n; ++v)
       if (canal[v] && !disc[v]) setIf(v, TissueClass::Canal);
   }

@@ -17,7 +17,9 @@
 //     open at its sides, a vessel or muscle everywhere). If the tip's own region fails, the nearest other region
 //     within seed_search_mm that passes is the target (a tip in a disc: the vertebra next to it).
 //  4. The body: the core grown back by the wall's width + 1 voxel into band and cortex (the strip the wall took,
-//     up to and including the cortex), holes filled again. The target vertebra: the body, the cortex 26-connected
+//     up to and including the cortex), holes filled again in 3-D and then in every sagittal and coronal slice
+//     (marrow fat that reaches a gap of the cortex is open in 3-D but enclosed in those slices; axial slices are
+//     not used: there the canal is enclosed by the vertebral ring). The target vertebra: the body, the cortex 26-connected
 //     to it within the body's axial extent +- 2 mm (pedicles, lamina), and the band voxels touching that cortex
 //     (its partial-volume rim).
 //  5. Disc: along the spine axis (the index axis nearest patient z), above and below the body in each of its
