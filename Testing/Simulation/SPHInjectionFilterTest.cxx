@@ -1,5 +1,7 @@
-// vtkSPHInjectionFilter in a VTK pipeline: the scaffold CT in (vtkImageData), particles and the simulated CT
-// out, setters, progress events, abort, and errors reported without a VTK error print.
+// vtkSPHInjectionFilter in a VTK pipeline: the scaffold CT in (vtkImageData, through SetInputData and through a
+// producer's SetInputConnection); out the simulated CT (port 0) and the cement label map (port 1), both on the
+// input's grid, and the cement points (port 2); the optional bone mask (port 1 in); setters, progress events,
+// abort, and errors reported without a VTK error print.
 #include "ScaffoldCT.h"
 
 #include "cementsph/imaging/ItkVtkBridge.h"
@@ -14,6 +16,8 @@
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 #include <vtkTrivialProducer.h>
+
+#include <cstdint>
 
 #include <cmath>
 
@@ -41,7 +45,7 @@ void onProgress(vtkObject* caller, unsigned long, void* clientData, void* callDa
 
 vtkSmartPointer<vtkSPHInjectionFilter> makeFilter(vtkImageData* ct, ProgressLog& log) {
   auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
-  filter->SetInputDataObject(0, ct);
+  filter->SetInputData(ct);
   filter->SetTipMm(13, 13, 13);
   filter->SetVolumeMl(0.1);
   filter->SetCannulaLengthMm(5);
@@ -69,10 +73,12 @@ TEST(SPHInjectionFilter, ParticlesAndSimulatedCTFromACTImage) {
   ASSERT_NE(particles, nullptr);
   EXPECT_EQ(std::size_t(particles->GetNumberOfPoints()), m["cement_points"].get<std::size_t>());
   EXPECT_EQ(particles->GetNumberOfVerts(), particles->GetNumberOfPoints());
+  EXPECT_EQ(particles, filter->GetOutputDataObject(vtkSPHInjectionFilter::CementPointsPort)); // port 2
   for (const char* a : {"velocity_m_per_s", "density_kg_per_m3", "pressure_pa", "age_s"})
     EXPECT_NE(particles->GetPointData()->GetArray(a), nullptr) << a;
   vtkImageData* sim = filter->GetSimulatedCTOutput();
   ASSERT_NE(sim, nullptr);
+  EXPECT_EQ(sim, filter->GetOutputDataObject(vtkSPHInjectionFilter::SimulatedCTPort)); // port 0
   int dims[3];
   sim->GetDimensions(dims);
   EXPECT_EQ(dims[0], 40);
@@ -119,4 +125,111 @@ TEST(SPHInjectionFilter, AbortStopsTheRun) {
   const nlohmann::json m = nlohmann::json::parse(filter->GetMetricsJSON());
   EXPECT_TRUE(m["stopped_early"].get<bool>());
   EXPECT_LT(m["simulated_time_s"].get<double>(), 1.0);
+}
+
+namespace {
+// The scaffold's voxel (i, j, k) of the label map / simulated CT / input, flat in VTK's point order.
+vtkIdType flat(int i, int j, int k, int n = 40) { return vtkIdType(i) + vtkIdType(n) * (vtkIdType(j) + vtkIdType(n) * vtkIdType(k)); }
+} // namespace
+
+// The label map (port 1) on the input's grid. Oracles independent of the filter: the scaffold's own geometry
+// (ScaffoldCT.h: rods solid, so no cement label on a rod voxel), the injected volume as flow x time (0.1 ml
+// at 0.05 ml/s for 2 s), pores of porosity 1 (pore-resolved: -100 HU below threshold_hu 0), so the cement
+// fills 0.1 ml / 0.125 mm^3 = 800 voxels; labelled voxels (at least half filled) within 10 % of that (the
+// front's part-filled voxels are counted when at least half full: a front of ~400 voxels at a mean fill
+// near 1/2 moves the count by a few per cent either way).
+TEST(SPHInjectionFilter, LabelMapOnTheInputGridHoldsTheInjectedVolume) {
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(cementsph::scene::testing::scaffold());
+  ct->SetOrigin(-3.0, 2.0, 5.5); // not the origin: the outputs must keep it
+  ProgressLog log;
+  auto filter = makeFilter(ct, log);
+  filter->SetTipMm(13 - 3.0, 13 + 2.0, 13 + 5.5);
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  vtkImageData* labels = filter->GetLabelMapOutput();
+  vtkImageData* sim = filter->GetSimulatedCTOutput();
+  ASSERT_NE(labels, nullptr);
+  EXPECT_EQ(labels, filter->GetOutputDataObject(vtkSPHInjectionFilter::LabelMapPort));
+  EXPECT_EQ(labels->GetScalarType(), VTK_UNSIGNED_CHAR);
+  for (vtkImageData* out : {labels, sim}) {
+    int extent[6];
+    out->GetExtent(extent);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(extent[2 * a], 0);
+      EXPECT_EQ(extent[2 * a + 1], 39);
+      EXPECT_DOUBLE_EQ(out->GetOrigin()[a], ct->GetOrigin()[a]);
+      EXPECT_DOUBLE_EQ(out->GetSpacing()[a], 0.5);
+    }
+  }
+  const auto* l = static_cast<const std::uint8_t*>(labels->GetScalarPointer());
+  std::size_t cement = 0, onRods = 0, leaked = 0, riseBelowHalf = 0;
+  for (int k = 0; k < 40; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i) {
+        const std::uint8_t v = l[flat(i, j, k)];
+        if (v == vtkSPHInjectionFilter::LeakedCement) ++leaked;
+        if (v != vtkSPHInjectionFilter::Cement) continue;
+        ++cement;
+        if (cementsph::scene::testing::scaffoldRod(i, j, k)) ++onRods;
+        // A labelled voxel is at least half filled: the simulated CT rose by at least k/2 = 1500 HU there.
+        if (sim->GetScalarComponentAsDouble(i, j, k, 0) - ct->GetScalarComponentAsDouble(i, j, k, 0) < 1500.0 - 1e-3)
+          ++riseBelowHalf;
+      }
+  EXPECT_EQ(onRods, 0u);
+  EXPECT_EQ(leaked, 0u); // no mask, pore-resolved bone: the engine assesses no leakage
+  EXPECT_EQ(riseBelowHalf, 0u);
+  const double oracleVoxels = 0.05 * 2.0 * 1e3 / (0.5 * 0.5 * 0.5); // ml -> mm^3, over the voxel volume
+  EXPECT_NEAR(double(cement), oracleVoxels, 0.10 * oracleVoxels);
+  // The tip's voxel is cement.
+  EXPECT_EQ(l[flat(26, 26, 26)], vtkSPHInjectionFilter::Cement);
+}
+
+// The optional bone mask (input port 1, through SetInputConnection): cement where the mask is 0 is leaked (2),
+// elsewhere 1; the oracle is the mask itself (its 0 half-space z index >= 27, i.e. ahead of the tip).
+TEST(SPHInjectionFilter, BoneMaskDecidesLeakedCement) {
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(cementsph::scene::testing::scaffold());
+  auto mask = vtkSmartPointer<vtkImageData>::New();
+  mask->CopyStructure(ct);
+  mask->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  auto* m = static_cast<std::uint8_t*>(mask->GetScalarPointer());
+  for (int k = 0; k < 40; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i) m[flat(i, j, k)] = k >= 27 ? 0 : 1;
+  auto ctSource = vtkSmartPointer<vtkTrivialProducer>::New();
+  ctSource->SetOutput(ct);
+  auto maskSource = vtkSmartPointer<vtkTrivialProducer>::New();
+  maskSource->SetOutput(mask);
+  ProgressLog log;
+  auto filter = makeFilter(ct, log);
+  filter->SetInputConnection(0, ctSource->GetOutputPort());
+  filter->SetBoneMaskConnection(maskSource->GetOutputPort());
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  const auto* l = static_cast<const std::uint8_t*>(filter->GetLabelMapOutput()->GetScalarPointer());
+  std::size_t ahead = 0, behind = 0, wrong = 0;
+  for (int k = 0; k < 40; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i) {
+        const std::uint8_t v = l[flat(i, j, k)];
+        if (v == vtkSPHInjectionFilter::NoCement) continue;
+        if (k >= 27) {
+          ++ahead;
+          wrong += v != vtkSPHInjectionFilter::LeakedCement;
+        } else {
+          ++behind;
+          wrong += v != vtkSPHInjectionFilter::Cement;
+        }
+      }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(ahead, 50u); // the cement reaches past the tip's plane
+  EXPECT_GT(behind, 50u);
+  // A mask on another grid: one line, no run.
+  auto small = vtkSmartPointer<vtkImageData>::New();
+  small->SetDimensions(20, 40, 40);
+  small->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  filter->SetBoneMaskData(small);
+  filter->Update();
+  EXPECT_NE(filter->GetErrorMessage().find("not on the CT's grid"), std::string::npos) << filter->GetErrorMessage();
+  EXPECT_EQ(filter->GetErrorMessage().find('\n'), std::string::npos);
+  EXPECT_EQ(filter->GetMetricsJSON(), "");
 }

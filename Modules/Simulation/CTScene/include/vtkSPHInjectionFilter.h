@@ -1,36 +1,66 @@
-// vtkSPHInjectionFilter: the inject runner (cementsph/scene/InjectionRunner.h) as a VTK algorithm.
+// vtkSPHInjectionFilter: the one injection driver (cementsph::scene::runInjection, InjectionRunner.h) as a VTK
+// image filter, so that reader -> threshold -> injection -> isosurface -> surface distance is a pipeline of
+// SetInputConnection calls (Examples/cpp/InjectionPipeline.cxx).
 //
-// Input port 0: the CT as vtkImageData (HU scalars, mm geometry, any direction matrix: AxisAlignedCT.h).
-// Output port 0: the fluid particles at the end of injection, vtkPolyData (mm; point arrays velocity_m_per_s,
-//   density_kg_per_m3, pressure_pa, age_s).
-// Output port 1: the simulated CT, vtkImageData on the input's full grid (its extent, origin, spacing and
+// Input port 0 (required): the CT, vtkImageData (HU in the first scalar component, any scalar type; mm
+//   geometry in the CT's patient frame, LPS; any direction matrix: AxisAlignedCT.h).
+// Input port 1 (optional): a bone mask on the SAME grid (same dimensions; non-zero = bone), e.g. a
+//   vtkImageThreshold of the CT or a segmentation from 3D Slicer. No engine reads it (they build their solid
+//   from the CT's HU and the scene's threshold_hu / bone model): it only decides the label map's classes
+//   (output 1): cement in a voxel the mask marks 0 is leaked. Not on the input's grid: an error (one line).
+// Output port 0: the simulated CT, float vtkImageData on the INPUT's grid (its extent, origin, spacing and
 //   direction): the input's HU outside the region of interest, inside it the input's HU plus the change the
-//   injection made (k rho_fluid / rho0), taken through physical points from the runner's simulated CT on the
+//   injection made (k rho_fluid / rho0), taken through physical points from the driver's simulated CT on the
 //   axis-aligned grid (InputGridPaste.h: exact for axial, flipped and axis-swapped CTs, interpolated for
-//   oblique ones). The files the runner writes hold the ROI of the axis-aligned grid only.
-// Parameters: the scene's values by setters (SetScene sets all of them at once, including the viscosity
-// table, integrator and model overrides that have no setter of their own). OutputDirectory non-empty: the
-// runner's files are written there too. Progress: UpdateProgress (ProgressEvent) as simulated time advances;
-// SetAbortExecute(1) from an observer stops the run at the next report.
-// Errors (bad scene, tip in solid, unstable run): RequestData leaves the outputs empty, fires ErrorEvent with
-// the message (no VTK error print), and keeps it: GetErrorMessage(), RethrowIfFailed().
+//   oblique ones). The simulated CT minus the input is therefore the injection's change voxel by voxel.
+// Output port 1: the cement label map, unsigned char vtkImageData on the input's grid: 0 no cement, 1 cement,
+//   2 leaked cement. Where the engine gives the cement per voxel (its points carry fill_fraction: the
+//   voxel-grid Darcy engine), 1 where the voxel's pores are at least half filled, as the engine's own
+//   cement_labels.nrrd; otherwise (particles) 1 where the simulated CT rose by at least k/2 (cement density
+//   at least half rho0, the threshold the phantom's cement uses). 2, for any cement: in a voxel the bone
+//   mask (input 1) marks 0 or, without a mask, where the engine assessed leakage (continuum bone) and the
+//   voxel is soft tissue by the scene's HU rule (BoneCalibration.h), the engine's own rule. The voxel-engine
+//   rule maps each cement voxel centre to the nearest input voxel: exact for axial and reoriented CTs.
+// Output port 2: the cement as points, vtkPolyData (mm, the CT's frame): the particles of a particle engine
+//   (velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s, ...) or one point per voxel holding cement
+//   (fill_fraction, cement_volume_mm3, ...), InjectionModel::cement().
+// Parameters: the scene's values by typed setters (SetScene sets all of them at once, including the
+// viscosity table, integrator, bone and model overrides that have no setter of their own). OutputDirectory
+// non-empty: the driver's files (metrics.json, simulated_ct.nrrd on the region, ...) are written there too.
+// Progress: UpdateProgress (ProgressEvent) as simulated time advances; SetAbortExecute(1) from an observer
+// stops the run at the next report (the outputs then hold the run so far, metrics say stopped_early).
+// Errors (bad scene, tip in solid, unstable run, a mask on another grid): RequestData leaves the outputs
+// empty, fires ErrorEvent with the message (no VTK error print), and keeps it: GetErrorMessage(),
+// RethrowIfFailed().
 #pragma once
 
+#include "cementsph/scene/InjectionModel.h"
 #include "cementsph/scene/SceneConfig.h"
 
-#include <vtkAlgorithm.h>
+#include <vtkImageAlgorithm.h>
 
 #include <exception>
+#include <optional>
 #include <string>
 
+class vtkAlgorithmOutput;
 class vtkImageData;
 class vtkPolyData;
 
-class vtkSPHInjectionFilter : public vtkAlgorithm {
+class vtkSPHInjectionFilter : public vtkImageAlgorithm {
 public:
   static vtkSPHInjectionFilter* New();
-  vtkTypeMacro(vtkSPHInjectionFilter, vtkAlgorithm)
+  vtkTypeMacro(vtkSPHInjectionFilter, vtkImageAlgorithm)
   void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  // The output ports.
+  enum OutputPort { SimulatedCTPort = 0, LabelMapPort = 1, CementPointsPort = 2 };
+  // The label map's values (output 1).
+  enum Label : unsigned char { NoCement = 0, Cement = 1, LeakedCement = 2 };
+
+  // The optional bone mask (input port 1).
+  void SetBoneMaskConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
+  void SetBoneMaskData(vtkDataObject* mask) { this->SetInputData(1, mask); }
 
   vtkSetVector3Macro(TipMm, double);
   vtkGetVector3Macro(TipMm, double);
@@ -70,24 +100,28 @@ public:
   void SetScene(const cementsph::scene::SceneConfig& scene);
   cementsph::scene::SceneConfig GetScene() const;
 
-  vtkPolyData* GetParticlesOutput();
   vtkImageData* GetSimulatedCTOutput();
-  // metrics.json of the last run ("" before one).
+  vtkImageData* GetLabelMapOutput();
+  vtkPolyData* GetCementPointsOutput();
+  vtkPolyData* GetParticlesOutput() { return this->GetCementPointsOutput(); } // the name before the rework
+  // metrics.json of the last run ("" before one, or after a failed one).
   const std::string& GetMetricsJSON() const { return this->MetricsJSON; }
+  // The typed summary of the last successful run (InjectionModel.h); nullptr before one.
+  const cementsph::scene::InjectionSummary* GetSummary() const { return this->Summary ? &*this->Summary : nullptr; }
   const std::string& GetErrorMessage() const { return this->ErrorMessage; }
   void RethrowIfFailed() const;
-
-  vtkTypeBool ProcessRequest(vtkInformation* request, vtkInformationVector** inputVector,
-                             vtkInformationVector* outputVector) override;
 
 protected:
   vtkSPHInjectionFilter();
   ~vtkSPHInjectionFilter() override = default;
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int FillOutputPortInformation(int port, vtkInformation* info) override;
-  int RequestInformation(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
-  int RequestUpdateExtent(vtkInformationVector** inputVector);
-  int RequestData(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
+  int RequestInformation(vtkInformation* request, vtkInformationVector** inputVector,
+                         vtkInformationVector* outputVector) override;
+  int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
+                          vtkInformationVector* outputVector) override;
+  int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
+                  vtkInformationVector* outputVector) override;
 
   double TipMm[3] = {0, 0, 0};
   double Direction[3] = {0, 0, 1};
@@ -99,6 +133,7 @@ protected:
   std::string OutputDirectory;
   cementsph::scene::SceneConfig Base; // the values without a setter of their own
   std::string MetricsJSON, ErrorMessage;
+  std::optional<cementsph::scene::InjectionSummary> Summary;
   std::exception_ptr Error;
 
 private:

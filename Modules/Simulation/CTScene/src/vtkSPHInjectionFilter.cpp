@@ -5,6 +5,7 @@
 #include "cementsph/scene/InputGridPaste.h"
 
 #include <vtkCommand.h>
+#include <vtkDataArray.h>
 #include <vtkDataObject.h>
 #include <vtkImageData.h>
 #include <vtkInformation.h>
@@ -14,13 +15,98 @@
 #include <vtkPolyData.h>
 #include <vtkStreamingDemandDrivenPipeline.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <string>
 
 vtkStandardNewMacro(vtkSPHInjectionFilter);
 
+namespace {
+
+using SDDP = vtkStreamingDemandDrivenPipeline;
+
+// The cement label map on the input's grid (the rules are in the header, output port 1).
+vtkSmartPointer<vtkImageData> cementLabels(vtkImageData* input, const cementsph::imaging::ImageType* ct,
+                                           const cementsph::imaging::ImageType* simulated, vtkPolyData* cement,
+                                           vtkImageData* mask, const cementsph::scene::SceneConfig& scene,
+                                           const cementsph::scene::InjectionSummary& summary, double huPerRelativeDensity) {
+  auto labels = vtkSmartPointer<vtkImageData>::New();
+  labels->SetExtent(input->GetExtent());
+  labels->SetOrigin(input->GetOrigin());
+  labels->SetSpacing(input->GetSpacing());
+  labels->SetDirectionMatrix(input->GetDirectionMatrix());
+  labels->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  labels->GetPointData()->GetScalars()->SetName("cement_labels");
+  auto* l = static_cast<std::uint8_t*>(labels->GetScalarPointer());
+  const vtkIdType count = labels->GetNumberOfPoints();
+  std::fill(l, l + count, std::uint8_t(vtkSPHInjectionFilter::NoCement));
+  // ITK's buffer and VTK's points share one order (x fastest), both over the input's whole grid.
+  const float* hu = ct->GetBufferPointer();
+  const float* sim = simulated->GetBufferPointer();
+  vtkDataArray* maskValues = mask ? mask->GetPointData()->GetScalars() : nullptr;
+  auto leaked = [&](vtkIdType i) {
+    if (maskValues) return maskValues->GetComponent(i, 0) == 0.0;
+    return summary.leakageAssessed &&
+           scene.bone.tissue(double(hu[i])) == cementsph::scene::BoneCalibration::Tissue::SoftTissue;
+  };
+  vtkDataArray* fill = cement ? cement->GetPointData()->GetArray("fill_fraction") : nullptr;
+  if (fill) {
+    // One point per voxel holding cement, at its centre on the axis-aligned grid: the nearest input voxel.
+    int extent[6];
+    input->GetExtent(extent);
+    const vtkIdType nx = extent[1] - extent[0] + 1, ny = extent[3] - extent[2] + 1;
+    for (vtkIdType p = 0; p < cement->GetNumberOfPoints(); ++p) {
+      const double f = fill->GetTuple1(p);
+      if (!(f > 0)) continue;
+      double x[3], ijk[3];
+      cement->GetPoint(p, x);
+      labels->TransformPhysicalPointToContinuousIndex(x, ijk);
+      vtkIdType index[3];
+      bool inside = true;
+      for (int a = 0; a < 3; ++a) {
+        index[a] = vtkIdType(std::lround(ijk[a]));
+        inside = inside && index[a] >= extent[2 * a] && index[a] <= extent[2 * a + 1];
+      }
+      if (!inside) continue;
+      const vtkIdType i = (index[0] - extent[0]) + nx * ((index[1] - extent[2]) + ny * (index[2] - extent[4]));
+      std::uint8_t label = leaked(i) ? vtkSPHInjectionFilter::LeakedCement
+                                     : f >= 0.5 ? vtkSPHInjectionFilter::Cement : vtkSPHInjectionFilter::NoCement;
+      if (label > l[i]) l[i] = label;
+    }
+    return labels;
+  }
+  // Particles: the simulated CT rose by at least k/2 (cement at half its rest density or more).
+  const double rise = 0.5 * huPerRelativeDensity;
+  for (vtkIdType i = 0; i < count; ++i)
+    if (double(sim[i]) - double(hu[i]) >= rise)
+      l[i] = leaked(i) ? vtkSPHInjectionFilter::LeakedCement : vtkSPHInjectionFilter::Cement;
+  return labels;
+}
+
+bool sameGrid(vtkImageData* a, vtkImageData* b) {
+  int ea[6], eb[6];
+  a->GetExtent(ea);
+  b->GetExtent(eb);
+  for (int i = 0; i < 3; ++i)
+    if (ea[2 * i + 1] - ea[2 * i] != eb[2 * i + 1] - eb[2 * i]) return false;
+  // The same voxel centres to a thousandth of a voxel: a mask resampled elsewhere is another grid.
+  double pa[3], pb[3];
+  a->TransformContinuousIndexToPhysicalPoint(ea[0], ea[2], ea[4], pa);
+  b->TransformContinuousIndexToPhysicalPoint(eb[0], eb[2], eb[4], pb);
+  const double* s = a->GetSpacing();
+  const double* t = b->GetSpacing();
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(pa[i] - pb[i]) > 1e-3 * s[i] || std::abs(s[i] - t[i]) > 1e-6 * s[i]) return false;
+  return true;
+}
+
+} // namespace
+
 vtkSPHInjectionFilter::vtkSPHInjectionFilter() {
-  this->SetNumberOfInputPorts(1);
-  this->SetNumberOfOutputPorts(2);
+  this->SetNumberOfInputPorts(2);
+  this->SetNumberOfOutputPorts(3);
   this->SetScene(cementsph::scene::scenePreset("paper"));
 }
 
@@ -74,73 +160,90 @@ cementsph::scene::SceneConfig vtkSPHInjectionFilter::GetScene() const {
   return s;
 }
 
-vtkPolyData* vtkSPHInjectionFilter::GetParticlesOutput() {
-  return vtkPolyData::SafeDownCast(this->GetOutputDataObject(0));
-}
 vtkImageData* vtkSPHInjectionFilter::GetSimulatedCTOutput() {
-  return vtkImageData::SafeDownCast(this->GetOutputDataObject(1));
+  return vtkImageData::SafeDownCast(this->GetOutputDataObject(SimulatedCTPort));
+}
+vtkImageData* vtkSPHInjectionFilter::GetLabelMapOutput() {
+  return vtkImageData::SafeDownCast(this->GetOutputDataObject(LabelMapPort));
+}
+vtkPolyData* vtkSPHInjectionFilter::GetCementPointsOutput() {
+  return vtkPolyData::SafeDownCast(this->GetOutputDataObject(CementPointsPort));
 }
 
 void vtkSPHInjectionFilter::RethrowIfFailed() const {
   if (this->Error) std::rethrow_exception(this->Error);
 }
 
-int vtkSPHInjectionFilter::FillInputPortInformation(int, vtkInformation* info) {
+int vtkSPHInjectionFilter::FillInputPortInformation(int port, vtkInformation* info) {
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  if (port == 1) info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
   return 1;
 }
 
 int vtkSPHInjectionFilter::FillOutputPortInformation(int port, vtkInformation* info) {
-  info->Set(vtkDataObject::DATA_TYPE_NAME(), port == 0 ? "vtkPolyData" : "vtkImageData");
+  info->Set(vtkDataObject::DATA_TYPE_NAME(), port == CementPointsPort ? "vtkPolyData" : "vtkImageData");
   return 1;
 }
 
-vtkTypeBool vtkSPHInjectionFilter::ProcessRequest(vtkInformation* request, vtkInformationVector** inputVector,
-                                                  vtkInformationVector* outputVector) {
-  if (request->Has(vtkDemandDrivenPipeline::REQUEST_INFORMATION()))
-    return this->RequestInformation(inputVector, outputVector);
-  if (request->Has(vtkStreamingDemandDrivenPipeline::REQUEST_UPDATE_EXTENT()))
-    return this->RequestUpdateExtent(inputVector);
-  if (request->Has(vtkDemandDrivenPipeline::REQUEST_DATA())) return this->RequestData(inputVector, outputVector);
-  return this->Superclass::ProcessRequest(request, inputVector, outputVector);
-}
-
-int vtkSPHInjectionFilter::RequestInformation(vtkInformationVector** inputVector, vtkInformationVector* outputVector) {
-  // The simulated CT lies on the input's grid.
+int vtkSPHInjectionFilter::RequestInformation(vtkInformation*, vtkInformationVector** inputVector,
+                                              vtkInformationVector* outputVector) {
+  // The simulated CT and the label map lie on the input's grid; the points have no extent.
   vtkInformation* in = inputVector[0]->GetInformationObject(0);
-  vtkInformation* out = outputVector->GetInformationObject(1);
-  using SDDP = vtkStreamingDemandDrivenPipeline;
-  if (in->Has(SDDP::WHOLE_EXTENT())) out->CopyEntry(in, SDDP::WHOLE_EXTENT());
-  if (in->Has(vtkDataObject::SPACING())) out->CopyEntry(in, vtkDataObject::SPACING());
-  if (in->Has(vtkDataObject::ORIGIN())) out->CopyEntry(in, vtkDataObject::ORIGIN());
-  if (in->Has(vtkDataObject::DIRECTION())) out->CopyEntry(in, vtkDataObject::DIRECTION());
-  vtkDataObject::SetPointDataActiveScalarInfo(out, VTK_FLOAT, 1);
-  return 1;
-}
-
-int vtkSPHInjectionFilter::RequestUpdateExtent(vtkInformationVector** inputVector) {
-  // The whole CT, whatever piece of the outputs was asked for.
-  vtkInformation* in = inputVector[0]->GetInformationObject(0);
-  using SDDP = vtkStreamingDemandDrivenPipeline;
-  if (in->Has(SDDP::WHOLE_EXTENT())) {
-    in->Set(SDDP::UPDATE_EXTENT(), in->Get(SDDP::WHOLE_EXTENT()), 6);
-    in->Set(SDDP::EXACT_EXTENT(), 1);
+  for (int port : {int(SimulatedCTPort), int(LabelMapPort)}) {
+    vtkInformation* out = outputVector->GetInformationObject(port);
+    for (auto* key : {SDDP::WHOLE_EXTENT()})
+      if (in->Has(key)) out->CopyEntry(in, key);
+    for (auto* key : {vtkDataObject::SPACING(), vtkDataObject::ORIGIN(), vtkDataObject::DIRECTION()})
+      if (in->Has(key)) out->CopyEntry(in, key);
+    vtkDataObject::SetPointDataActiveScalarInfo(out, port == SimulatedCTPort ? VTK_FLOAT : VTK_UNSIGNED_CHAR, 1);
   }
+  // The executive copied the input's image keys to every output; a polydata output has none.
+  vtkInformation* points = outputVector->GetInformationObject(CementPointsPort);
+  points->Remove(SDDP::WHOLE_EXTENT());
+  points->Remove(vtkDataObject::SPACING());
+  points->Remove(vtkDataObject::ORIGIN());
+  points->Remove(vtkDataObject::DIRECTION());
   return 1;
 }
 
-int vtkSPHInjectionFilter::RequestData(vtkInformationVector** inputVector, vtkInformationVector* outputVector) {
+int vtkSPHInjectionFilter::RequestUpdateExtent(vtkInformation*, vtkInformationVector** inputVector,
+                                               vtkInformationVector*) {
+  // The whole CT (and mask), whatever piece of the outputs was asked for: the run needs all of it.
+  for (int port = 0; port < 2; ++port)
+    for (int c = 0; c < inputVector[port]->GetNumberOfInformationObjects(); ++c) {
+      vtkInformation* in = inputVector[port]->GetInformationObject(c);
+      if (in->Has(SDDP::WHOLE_EXTENT())) {
+        in->Set(SDDP::UPDATE_EXTENT(), in->Get(SDDP::WHOLE_EXTENT()), 6);
+        in->Set(SDDP::EXACT_EXTENT(), 1);
+      }
+    }
+  return 1;
+}
+
+int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
+                                       vtkInformationVector* outputVector) {
   vtkImageData* input = vtkImageData::GetData(inputVector[0]);
-  vtkPolyData* particles = vtkPolyData::GetData(outputVector, 0);
-  vtkImageData* simulated = vtkImageData::GetData(outputVector, 1);
+  vtkImageData* mask = inputVector[1]->GetNumberOfInformationObjects() ? vtkImageData::GetData(inputVector[1]) : nullptr;
+  vtkImageData* simulated = vtkImageData::GetData(outputVector, SimulatedCTPort);
+  vtkImageData* labels = vtkImageData::GetData(outputVector, LabelMapPort);
+  vtkPolyData* points = vtkPolyData::GetData(outputVector, CementPointsPort);
   this->Error = nullptr;
   this->ErrorMessage.clear();
   this->MetricsJSON.clear();
-  particles->Initialize();
+  this->Summary.reset();
   simulated->Initialize();
+  labels->Initialize();
+  points->Initialize();
   try {
-    if (!input || !input->GetPointData()->GetScalars()) throw std::invalid_argument("vtkSPHInjectionFilter: no CT on the input");
+    if (!input || !input->GetPointData()->GetScalars())
+      throw std::invalid_argument("vtkSPHInjectionFilter: no CT on input port 0");
+    if (mask && !mask->GetPointData()->GetScalars())
+      throw std::invalid_argument("vtkSPHInjectionFilter: the bone mask on input port 1 has no scalars");
+    if (mask && !sameGrid(input, mask))
+      throw std::invalid_argument("vtkSPHInjectionFilter: the bone mask on input port 1 is not on the CT's grid "
+                                  "(same dimensions, origin and spacing required)");
     const auto ct = cementsph::imaging::imageFromVtk(input);
+    const cementsph::scene::SceneConfig scene = this->GetScene();
     cementsph::scene::InjectionRunOptions o;
     o.outDir = this->OutputDirectory;
     o.huPerRelativeDensity = this->HUPerRelativeDensity;
@@ -150,27 +253,35 @@ int vtkSPHInjectionFilter::RequestData(vtkInformationVector** inputVector, vtkIn
       return !this->GetAbortExecute();
     };
     this->UpdateProgress(0.0);
-    const auto r = cementsph::scene::runInjection(ct, this->GetScene(), o);
-    this->MetricsJSON = r.metrics.dump(2);
-    particles->ShallowCopy(r.particles);
-    // The whole input grid: the input's HU with the simulated region of interest pasted in. The runner's
+    const auto r = cementsph::scene::runInjection(ct, scene, o);
+    // The whole input grid: the input's HU with the simulated region of interest pasted in. The driver's
     // simulated CT lies on the AXIS-ALIGNED CT's grid (a reorientation or resampling when the input's
     // direction is not the identity), so it goes back through physical points, not through its indices.
     const auto background = cementsph::scene::alignedBackgroundOn(ct, r.simulatedCt);
     const auto full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
     vtkSmartPointer<vtkImageData> image = cementsph::imaging::toVtk(full);
+    vtkSmartPointer<vtkImageData> labelMap =
+        cementLabels(input, ct, full, r.particles, mask, scene, r.summary, this->HUPerRelativeDensity);
     simulated->ShallowCopy(image);
-    // Keep the input's extent labelling (same size).
+    simulated->GetPointData()->GetScalars()->SetName("simulated_ct_hu");
+    // The input's own extent numbering (toVtk starts at 0; a cropped reader's output need not).
     simulated->SetExtent(input->GetExtent());
     simulated->SetOrigin(input->GetOrigin());
     simulated->SetSpacing(input->GetSpacing());
     simulated->SetDirectionMatrix(input->GetDirectionMatrix());
+    labels->ShallowCopy(labelMap);
+    if (r.particles) points->ShallowCopy(r.particles);
+    this->MetricsJSON = r.metrics.dump(2);
+    this->Summary = r.summary;
     this->UpdateProgress(1.0);
   } catch (const std::exception& e) {
     this->Error = std::current_exception();
     this->ErrorMessage = e.what();
-    particles->Initialize();
+    this->MetricsJSON.clear();
+    this->Summary.reset();
     simulated->Initialize();
+    labels->Initialize();
+    points->Initialize();
     this->InvokeEvent(vtkCommand::ErrorEvent, const_cast<char*>(this->ErrorMessage.c_str()));
   }
   return 1;
