@@ -349,9 +349,50 @@ void requireDataFile(const std::string& header, const std::string& file, std::ui
 
 // ---- MetaImage ----
 
-struct MetaDataFiles {
-  std::vector<std::string> files; // empty: LOCAL or one file, the payload check's
-};
+// The files a MetaImage's voxels are in when there are several (ElementDataFile = LIST, or a pattern),
+// beside the header; empty for LOCAL or one file. Throws unless there is exactly one existing file per
+// slice: MetaIO reads one name per line after LIST and leaves slices unread when lines run out, and
+// reads a pattern's files into slice after slice of its buffer, past its end when there are too many.
+// DimSize was checked before (checkMetaHeader).
+std::vector<std::string> metaDataFiles(const std::string& path, const TextHeader& h) {
+  const std::string dataFile = h.fields.at("elementdatafile");
+  const auto w = words(dataFile);
+  std::array<long long, 3> size{};
+  const auto d = words(h.fields.at("dimsize"));
+  for (std::size_t i = 0; i < 3; ++i) size[i] = toInteger(d[i]).value_or(1);
+  std::vector<std::string> names;
+  if (!w.empty() && w[0] == "LIST") {
+    long long fileDim = 2; // "LIST", "LIST 2D": one slice per file
+    if (w.size() > 1 && std::isdigit(static_cast<unsigned char>(w[1][0]))) fileDim = w[1][0] - '0';
+    if (fileDim < 1 || fileDim > 3) fileDim = 2;
+    long long needed = 1;
+    for (long long a = fileDim; a < 3; ++a) needed *= size[std::size_t(a)];
+    names = linesAfterKey(path, "elementdatafile", '=');
+    if (static_cast<long long>(names.size()) < needed)
+      refuse(path, "ElementDataFile = LIST names " + std::to_string(names.size()) + " data files, but DimSize needs " +
+                       std::to_string(needed) + "; list one file per slice");
+    names.resize(std::size_t(needed));
+    for (std::size_t k = 0; k < names.size(); ++k)
+      if (names[k].empty() || names[k].size() > 1000) // MetaIO reads names into a 1024-byte buffer
+        refuse(path, "ElementDataFile = LIST: line " + std::to_string(k + 1) + " after it is not a file name");
+  } else if (dataFile.find('%') != std::string::npos) {
+    // MetaIO reads a fifth word as part of a file name with blanks and then takes other words for
+    // first and step than these: such a pattern is not read the way it looks.
+    if (w.size() > 4)
+      refuse(path, "ElementDataFile = " + shownValue(dataFile) + ": a pattern is 'name%03d.raw first last step' "
+                   "(no blanks in the name); rename the files");
+    names = patternFiles(path, "ElementDataFile", dataFile, w, size[2], false);
+  } else {
+    return {};
+  }
+  for (std::string& name : names) {
+    std::error_code ec;
+    if (!fs::is_regular_file(besideHeader(path, name), ec))
+      refuse(path, "data file " + shownValue(name) + " is missing; put it beside the header or fix ElementDataFile");
+    name = besideHeader(path, name);
+  }
+  return names;
+}
 
 // MetaIO trusts its header: NDims outside 1..10 makes it loop or index out of its arrays, a DimSize of 0
 // divides by zero, NaN/zero spacings become 1 mm, a pattern becomes a printf format. So the header is
@@ -373,14 +414,12 @@ void checkMetaHeader(const std::string& path) {
   if (!n || *n != 3) refuse(path, "NDims = " + shownValue(*ndims) + ": not a 3-D volume (a CT has NDims = 3)");
   const auto dimSize = field("dimsize");
   if (!dimSize) refuse(path, "MetaImage header has no DimSize key (the voxels along x, y and z)");
-  std::array<long long, 3> size{};
   {
     const auto w = words(*dimSize);
     for (std::size_t i = 0; i < 3; ++i) {
       const auto x = i < w.size() ? toInteger(w[i]) : std::nullopt;
-      if (w.size() != 3 || !x || *x < 1)
+      if (w.size() != 3 || !x || *x < 1) // 0 divides by zero in MetaIO
         refuse(path, "DimSize = " + shownValue(*dimSize) + " is not 3 positive whole numbers (damaged header?)");
-      size[i] = *x;
     }
   }
   // Keys as MetaIO spells them; the header map holds them in lower case.
@@ -417,65 +456,9 @@ void checkMetaHeader(const std::string& path) {
     const auto b = toInteger(trim(*v));
     if (!b || *b < -1) refuse(path, "HeaderSize = " + shownValue(*v) + " must be -1 or a byte count >= 0");
   }
-  const std::string dataFile = field("elementdatafile").value_or("");
-  const auto w = words(dataFile);
-  if (w.empty()) refuse(path, "ElementDataFile has no value; it must be LOCAL or a file name");
-  if (w[0] == "LIST") {
-    // MetaIO reads one file name per line after the header; fewer lines than files leave slices unread.
-    long long fileDim = 2;
-    if (w.size() > 1 && std::isdigit(static_cast<unsigned char>(w[1][0]))) fileDim = w[1][0] - '0';
-    if (fileDim < 1 || fileDim > 3) fileDim = 2;
-    long long needed = 1;
-    for (long long a = fileDim; a < 3; ++a) needed *= size[std::size_t(a)];
-    const auto names = linesAfterKey(path, "elementdatafile", '=');
-    if (static_cast<long long>(names.size()) < needed)
-      refuse(path, "ElementDataFile = LIST names " + std::to_string(names.size()) + " data files, but DimSize needs " +
-                       std::to_string(needed) + "; list one file per slice");
-    for (long long k = 0; k < needed; ++k) {
-      const std::string& name = names[std::size_t(k)];
-      if (name.empty() || name.size() > 1000)
-        refuse(path, "ElementDataFile = LIST: line " + std::to_string(k + 1) + " after it is not a file name");
-      std::error_code ec;
-      if (!fs::is_regular_file(besideHeader(path, name), ec))
-        refuse(path, "data file " + shownValue(name) + " is missing; put it beside the header or fix the list");
-    }
-  } else if (dataFile.find('%') != std::string::npos) {
-    // MetaIO reads a fifth word as part of a file name with blanks and then takes other words for
-    // first and step than these: such a pattern is not read the way it looks.
-    if (w.size() > 4)
-      refuse(path, "ElementDataFile = " + shownValue(dataFile) + ": a pattern is 'name%03d.raw first last step' "
-                   "(no blanks in the name); rename the files");
-    for (const std::string& name : patternFiles(path, "ElementDataFile", dataFile, w, size[2], false)) {
-      std::error_code ec;
-      if (!fs::is_regular_file(besideHeader(path, name), ec))
-        refuse(path, "data file " + shownValue(name) + " (from ElementDataFile's pattern) is missing");
-    }
-  }
-}
-
-// The files a MetaImage's voxels are in, when there are several (LIST or a pattern); checked by checkMetaHeader.
-std::vector<std::string> metaDataFiles(const std::string& path, const TextHeader& h) {
-  const std::string dataFile = h.fields.at("elementdatafile");
-  const auto w = words(dataFile);
-  std::array<long long, 3> size{};
-  const auto d = words(h.fields.at("dimsize"));
-  for (std::size_t i = 0; i < 3; ++i) size[i] = *toInteger(d[i]);
-  std::vector<std::string> names;
-  if (!w.empty() && w[0] == "LIST") {
-    long long fileDim = 2;
-    if (w.size() > 1 && std::isdigit(static_cast<unsigned char>(w[1][0]))) fileDim = w[1][0] - '0';
-    if (fileDim < 1 || fileDim > 3) fileDim = 2;
-    long long needed = 1;
-    for (long long a = fileDim; a < 3; ++a) needed *= size[std::size_t(a)];
-    names = linesAfterKey(path, "elementdatafile", '=');
-    names.resize(std::size_t(needed));
-  } else if (dataFile.find('%') != std::string::npos) {
-    names = patternFiles(path, "ElementDataFile", dataFile, w, size[2], false);
-  } else {
-    return {};
-  }
-  for (std::string& name : names) name = besideHeader(path, name);
-  return names;
+  if (words(field("elementdatafile").value_or("")).empty())
+    refuse(path, "ElementDataFile has no value; it must be LOCAL or a file name");
+  (void)metaDataFiles(path, h);
 }
 
 void checkMetaPayload(const std::string& path, std::uintmax_t imageBytes) {
@@ -539,6 +522,49 @@ std::vector<std::optional<std::vector<double>>> nrrdVectors(const std::string& p
     i = close + 1;
   }
   return out;
+}
+
+// The files a NRRD's data is in when there are several ("data file: LIST [subdim]" with one name per line
+// after it, or "data file: name%03d.raw first last step [subdim]"), beside the header; empty for one file or
+// none. Throws unless there is exactly one existing file per sub-volume (teem: per slice of the last axis
+// unless subdim says otherwise). dimension and sizes were checked before (checkNrrdHeader).
+std::vector<std::string> nrrdDataFiles(const std::string& path, const TextHeader& h) {
+  const auto at = h.fields.count("data file") ? h.fields.find("data file") : h.fields.find("datafile");
+  if (at == h.fields.end()) return {};
+  const std::string& dataFile = at->second;
+  const auto w = words(dataFile);
+  const bool list = !w.empty() && w[0] == "LIST";
+  if (!list && dataFile.find('%') == std::string::npos) return {};
+  std::vector<long long> sizes;
+  for (const std::string& t : words(h.fields.count("sizes") ? h.fields.at("sizes") : ""))
+    sizes.push_back(toInteger(t).value_or(1));
+  long long subdim = static_cast<long long>(sizes.size()) - 1;
+  const std::size_t subdimAt = list ? 1 : 4;
+  if (w.size() > subdimAt) {
+    const auto d = toInteger(w[subdimAt]);
+    if (!d || *d < 1 || *d > static_cast<long long>(sizes.size()))
+      refuse(path, "data file: " + shownValue(dataFile) + ": the sub-dimension must be 1.." + std::to_string(sizes.size()));
+    subdim = *d;
+  }
+  long long needed = 1;
+  for (std::size_t a = std::size_t(std::max(0LL, subdim)); a < sizes.size(); ++a) needed *= sizes[a];
+  std::vector<std::string> names;
+  if (list) {
+    names = linesAfterKey(path, at->first, ':');
+    if (static_cast<long long>(names.size()) < needed)
+      refuse(path, "data file: LIST names " + std::to_string(names.size()) + " files, but sizes need " +
+                       std::to_string(needed) + "; list one file per slice");
+    names.resize(std::size_t(needed));
+  } else {
+    names = patternFiles(path, "data file", dataFile, w, needed, true);
+  }
+  for (std::string& name : names) {
+    std::error_code ec;
+    if (name.empty() || !fs::is_regular_file(besideHeader(path, name), ec))
+      refuse(path, "data file " + shownValue(name) + " is missing; put it beside the header or fix the header");
+    name = besideHeader(path, name);
+  }
+  return names;
 }
 
 // NRRD fields ITK's NRRD reader uses for the geometry, checked in the file: it replaces a NaN or zero
@@ -608,45 +634,7 @@ void checkNrrdHeader(const std::string& path) {
     for (const auto& d : nrrdVectors(path, "space origin", *v))
       for (double x : d.value_or(std::vector<double>{}))
         if (!std::isfinite(x)) refuse(path, "space origin: " + shownValue(*v) + " is not a finite position");
-  const auto dataFile = field({"data file", "datafile"});
-  if (!dataFile) return;
-  const auto w = words(*dataFile);
-  const bool list = !w.empty() && w[0] == "LIST";
-  if (!list && dataFile->find('%') == std::string::npos) return;
-  const auto sizesText = field({"sizes"});
-  if (!sizesText) refuse(path, "NRRD header has no sizes field");
-  std::vector<long long> sizes;
-  for (const std::string& s : words(*sizesText)) {
-    const auto x = toInteger(s);
-    if (!x || *x < 1) refuse(path, "sizes: " + shownValue(*sizesText) + " is not positive whole numbers");
-    sizes.push_back(*x);
-  }
-  // teem: one file per slice of the last axis unless a sub-dimension follows ("LIST 2", "fmt a b c 2").
-  long long subdim = static_cast<long long>(sizes.size()) - 1;
-  const std::size_t subdimAt = list ? 1 : 4;
-  if (w.size() > subdimAt) {
-    const auto s = toInteger(w[subdimAt]);
-    if (!s || *s < 1 || *s > static_cast<long long>(sizes.size()))
-      refuse(path, "data file: " + shownValue(*dataFile) + ": the sub-dimension must be 1.." + std::to_string(sizes.size()));
-    subdim = *s;
-  }
-  long long needed = 1;
-  for (std::size_t a = std::size_t(subdim); a < sizes.size(); ++a) needed *= sizes[a];
-  std::vector<std::string> names;
-  if (list) {
-    names = linesAfterKey(path, "data file", ':');
-    if (names.empty()) names = linesAfterKey(path, "datafile", ':');
-    if (static_cast<long long>(names.size()) < needed)
-      refuse(path, "data file: LIST names " + std::to_string(names.size()) + " files, but sizes need " +
-                       std::to_string(needed) + "; list one file per slice");
-  } else {
-    names = patternFiles(path, "data file", *dataFile, w, needed, true);
-  }
-  for (const std::string& name : names) {
-    std::error_code ec;
-    if (name.empty() || !fs::is_regular_file(besideHeader(path, name), ec))
-      refuse(path, "data file " + shownValue(name) + " is missing; put it beside the header or fix the header");
-  }
+  (void)nrrdDataFiles(path, h);
 }
 
 void checkNrrdPayload(const std::string& path, std::uintmax_t imageBytes) {
@@ -659,21 +647,9 @@ void checkNrrdPayload(const std::string& path, std::uintmax_t imageBytes) {
     if (h.fields.count(key) && trim(h.fields.at(key)) != "0") return;
   const Packing packing = encoding == "gzip" || encoding == "gz" ? Packing::Gzip : Packing::Raw;
   if (encoding != "raw" && packing != Packing::Gzip) return; // text encodings: the reader counts the values
-  const auto w = words(dataFile);
-  if (!w.empty() && (w[0] == "LIST" || dataFile.find('%') != std::string::npos)) {
-    std::vector<long long> sizes;
-    for (const std::string& s : words(h.fields.count("sizes") ? h.fields.at("sizes") : "")) sizes.push_back(toInteger(s).value_or(1));
-    const bool list = w[0] == "LIST";
-    long long subdim = static_cast<long long>(sizes.size()) - 1;
-    const std::size_t subdimAt = list ? 1 : 4;
-    if (w.size() > subdimAt) subdim = toInteger(w[subdimAt]).value_or(subdim);
-    long long needed = 1;
-    for (std::size_t a = std::size_t(std::max(0LL, subdim)); a < sizes.size(); ++a) needed *= sizes[a];
-    std::vector<std::string> names = list ? linesAfterKey(path, "data file", ':') : patternFiles(path, "data file", dataFile, w, needed, true);
-    if (list && names.empty()) names = linesAfterKey(path, "datafile", ':');
-    names.resize(std::size_t(std::max(1LL, needed)));
-    for (const std::string& name : names)
-      requireDataFile(path, besideHeader(path, name), 0, packing, imageBytes / names.size());
+  const auto files = nrrdDataFiles(path, h);
+  if (!files.empty()) {
+    for (const std::string& f : files) requireDataFile(path, f, 0, packing, imageBytes / files.size());
     return;
   }
   if (dataFile.empty() && !h.complete) refuse(path, "NRRD header has no end (no blank line)");
