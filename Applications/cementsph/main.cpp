@@ -5,6 +5,9 @@
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/LibraryMessages.h"
 #include "cementsph/provenance/Provenance.h"
+#ifdef CEMENTSPH_HAS_RENDERING
+#include "cementsph/rendering/RenderBackend.h"
+#endif
 #include "cementsph/sph/Simulation.h"
 
 #include <omp.h>
@@ -19,6 +22,7 @@
 #include <exception>
 #include <iostream>
 #include <map>
+#include <streambuf>
 #include <stdexcept>
 
 namespace cementsph::app {
@@ -84,6 +88,13 @@ void chooseDefaultThreads() {
 // numbers were written), as the subcommands return themselves.
 constexpr int kBadInput = 1, kFailedRun = 2;
 
+// Where --quiet sends a command's own output.
+class NullBuffer : public std::streambuf {
+protected:
+  int overflow(int c) override { return traits_type::not_eof(c); }
+  std::streamsize xsputn(const char*, std::streamsize n) override { return n; }
+};
+
 // One line: the message with its line breaks turned into spaces (library messages can hold several).
 std::string singleLine(const std::string& text) { return cementsph::imaging::oneLine(text); }
 
@@ -113,10 +124,15 @@ int main(int argc, char** argv) {
   std::sort(commands.begin(), commands.end(),
             [](const Command& a, const Command& b) { return a.name < b.name; });
   std::map<CLI::App*, CommandRunner> runners;
+  // --quiet on every subcommand: a command with its own (inject, phantom, plan: no progress line) keeps it;
+  // on the others it silences what they print but errors (main prints those itself, after the run).
+  bool quiet = false;
   for (const Command& command : commands) {
     CLI::App* sub = app.add_subcommand(command.name, command.summary);
     runners[sub] = command.setup(*sub);
     capThreadsOption(*sub);
+    if (!sub->get_option_no_throw("--quiet"))
+      sub->add_flag("--quiet", quiet, "Print nothing but errors (the files are written as usual)");
   }
 
   try {
@@ -131,10 +147,33 @@ int main(int argc, char** argv) {
     // One line naming the option, and where the options are listed; not CLI11's own exit codes (105-114).
     std::string name = "cementsph";
     for (const CLI::App* sub : app.get_subcommands()) name += " " + sub->get_name();
+    if (app.get_subcommands().empty()) {
+      // No subcommand recognised: name the word that is not one, and list those there are.
+      std::string word, names;
+      for (int i = 1; i < argc && word.empty(); ++i)
+        if (argv[i][0] != '-') word = argv[i];
+      for (const Command& command : commands) names += (names.empty() ? "" : ", ") + command.name;
+      if (!word.empty())
+        std::cerr << "cementsph: error: '" << singleLine(word).substr(0, 60) << "' is not a subcommand (the subcommands: "
+                  << names << "; see cementsph --help)\n";
+      else
+        std::cerr << "cementsph: error: a subcommand is required (the subcommands: " << names
+                  << "; see cementsph --help)\n";
+      return kBadInput;
+    }
     std::cerr << name << ": error: " << singleLine(e.what()) << " (see " << name << " --help)\n";
     return kBadInput;
   }
   cementsph::imaging::setLibraryMessagesVerbose(verbose);
+#ifdef CEMENTSPH_HAS_RENDERING
+  // Environment options are checked before any work, not when the first picture is drawn.
+  try {
+    cementsph::rendering::checkRenderBackendEnvironment();
+  } catch (const std::exception& e) {
+    std::cerr << "cementsph: error: " << singleLine(e.what()) << "\n";
+    return kBadInput;
+  }
+#endif
 
   std::map<CLI::App*, bool> overRanks;
   for (const Command& command : commands) overRanks[app.get_subcommand(command.name)] = command.spreadsOverRanks;
@@ -142,23 +181,45 @@ int main(int argc, char** argv) {
     if (!sub->parsed()) continue;
     if (quietRank && !overRanks[sub]) return 0; // rank 0 runs this command alone
     const std::string prefix = "cementsph " + sub->get_name() + ": error: ";
+    // --quiet: the command's own output is silenced while it runs; main's error line comes after.
+    std::streambuf* const out = std::cout.rdbuf();
+    std::streambuf* const err = std::cerr.rdbuf();
+    NullBuffer nothing; // outlives `restore`
+    struct Restore {
+      std::streambuf *out, *err;
+      ~Restore() {
+        std::cout.rdbuf(out);
+        std::cerr.rdbuf(err);
+      }
+    } restore{out, err};
+    if (quiet) {
+      std::cout.rdbuf(&nothing);
+      std::cerr.rdbuf(&nothing);
+    }
     try {
-      return run();
+      const int status = run();
+      return status;
     } catch (const cementsph::parallel::FarmStopped&) { // a worker rank: rank 0 says why
+      std::cout.rdbuf(out), std::cerr.rdbuf(err);
       return kBadInput;
     } catch (const CLI::ParseError& e) { // a subcommand run by another one (demo: inject, compare)
+      std::cout.rdbuf(out), std::cerr.rdbuf(err);
       std::cerr << prefix << singleLine(e.what()) << "\n";
       return kBadInput;
     } catch (const std::bad_alloc&) {
+      std::cout.rdbuf(out), std::cerr.rdbuf(err);
       std::cerr << prefix << "out of memory (a smaller volume, region or particle count needs less)\n";
       return kFailedRun;
     } catch (const cementsph::sph::SimulationError& e) { // unstable, or the cement has nowhere to go
+      std::cout.rdbuf(out), std::cerr.rdbuf(err);
       std::cerr << prefix << singleLine(e.what()) << "\n";
       return kFailedRun;
     } catch (const cementsph::imaging::OutputError& e) {
+      std::cout.rdbuf(out), std::cerr.rdbuf(err);
       std::cerr << prefix << singleLine(e.what()) << "\n";
       return kFailedRun;
     } catch (const std::exception& e) {
+      std::cout.rdbuf(out), std::cerr.rdbuf(err);
       std::cerr << prefix << singleLine(e.what()) << "\n";
       return kBadInput;
     }

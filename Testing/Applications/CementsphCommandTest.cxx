@@ -80,3 +80,46 @@ TEST(CementsphCommand, SmallDarcyRunWritesCsvAndPlot) {
   EXPECT_EQ(std::string(magic + 1, 3), "PNG");
   EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 2); // no temporaries
 }
+
+// Conventions every subcommand shares (issue "A toolkit people build on", item 5).
+TEST(CementsphCommand, AnUnknownSubcommandIsNamedWithTheList) {
+  const Result r = run("injekt --ct x.nrrd");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("'injekt' is not a subcommand"), std::string::npos) << r.output;
+  // The README's subcommands, listed in the line.
+  for (const char* name : {"compare", "darcy", "demo", "drr", "inject", "phantom", "plan", "register", "study",
+                           "viscosity", "xray"})
+    EXPECT_NE(r.output.find(name), std::string::npos) << name << ": " << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+}
+
+TEST(CementsphCommand, QuietPrintsNothingButErrorsOnEverySubcommand) {
+  // Hagen-Poiseuille through the default 11G cannula: a run that prints its figures, then the same quiet.
+  const Result loud = run("viscosity --viscosity-pa-s 100");
+  ASSERT_EQ(loud.status, 0) << loud.output;
+  EXPECT_FALSE(loud.output.empty());
+  const Result quiet = run("viscosity --viscosity-pa-s 100 --quiet");
+  EXPECT_EQ(quiet.status, 0) << quiet.output;
+  EXPECT_EQ(quiet.output, "");
+  // An error still reaches stderr under --quiet.
+  const Result bad = run("viscosity --viscosity-pa-s -1 --quiet");
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.output.find("--viscosity-pa-s"), std::string::npos) << bad.output;
+  // Every subcommand takes --quiet (its help lists it).
+  for (const char* name : {"compare", "darcy", "demo", "inject", "phantom", "plan", "register", "study",
+                           "viscosity", "xray"}) {
+    const Result help = run(std::string(name) + " --help");
+    EXPECT_NE(help.output.find("--quiet"), std::string::npos) << name;
+  }
+}
+
+TEST(CementsphCommand, AMisspeltRenderBackendIsRefusedBeforeAnyWork) {
+  const fs::path out = scratch("bad-backend");
+  setenv("CEMENTSPH_RENDER_BACKEND", "osmeas", 1);
+  const Result r = run("darcy --lattice 6 --porosities 0.8 --spacings-mm 1 --viscosities-pa-s 10 --out " + out.string());
+  unsetenv("CEMENTSPH_RENDER_BACKEND");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("CEMENTSPH_RENDER_BACKEND is 'osmeas'"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(out / "permeability.csv"));
+}

@@ -57,6 +57,18 @@ std::vector<RenderBackend> backendsToTry() {
                       "'; use osmesa, egl or x, or unset it to let the program choose");
 }
 
+} // namespace
+
+void checkRenderBackendEnvironment() {
+  try {
+    backendsToTry();
+  } catch (const RenderFailure& e) {
+    throw std::invalid_argument(e.what());
+  }
+}
+
+namespace {
+
 vtkSmartPointer<vtkRenderWindow> makeXWindow() {
   detail::useGlxForGlew();
   VirtualDisplay::ensureDisplay();

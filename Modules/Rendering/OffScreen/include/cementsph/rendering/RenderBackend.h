@@ -17,6 +17,10 @@ enum class RenderBackend { OSMesa, SurfacelessEGL, XDisplay };
 // "osmesa", "egl", "x": the names CEMENTSPH_RENDER_BACKEND takes and metrics/log lines report.
 std::string renderBackendName(RenderBackend backend);
 
+// Checks CEMENTSPH_RENDER_BACKEND at a program's start, so that a misspelt value is one line before any work
+// rather than a failed picture at the end: std::invalid_argument naming the variable and the valid values.
+void checkRenderBackendEnvironment();
+
 // The backend that made the most recent render window in this process; empty before the first one.
 std::optional<RenderBackend> lastRenderBackend();
 
