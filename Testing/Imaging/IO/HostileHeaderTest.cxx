@@ -172,6 +172,9 @@ TEST(HostileMetaImage, DimensionsAndSpacingsOutsideTheirRangeAreRefused) {
   expectRefused(metaCase(dir, "none.mhd", "ElementSpacing", "all.raw"), "ElementSpacing");
   expectRefused(metaCase(dir, "t.mhd", "TransformMatrix = 1 0 0 0 0 0 0 0 1", "all.raw"), "TransformMatrix");
   expectRefused(metaCase(dir, "c.mhd", "ElementNumberOfChannels = 3", "all.raw"), "ElementNumberOfChannels");
+  for (const char* type : {"ElementType = MET_STRING", "ElementType = MET_FLOAT_ARRAY", "ElementType = junk",
+                           "ElementType = "})
+    expectRefused(metaCase(dir, "e.mhd", type, "all.raw"), "ElementType");
   // A value of 100 kB is echoed cut short (expectRefused bounds the message's length); a header over 1 MiB
   // is not read on.
   expectRefused(metaCase(dir, "big.mhd", "NDims = " + std::string(100000, '7'), "all.raw"), "NDims");

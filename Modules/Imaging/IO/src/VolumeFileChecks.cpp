@@ -13,6 +13,7 @@
 #include <sstream>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -447,6 +448,16 @@ void checkMetaHeader(const std::string& path) {
         if (!(scaledNorm(&m[std::size_t(3 * c)], 3) > 0))
           refuse(path, kv->first + " = " + shownValue(kv->second) + " has a zero axis (damaged header?)");
     }
+  // One number per voxel of a type MetaIO knows: arrays, vectors and strings are not a CT (and an
+  // unknown type leaves MetaIO without an element size).
+  {
+    const std::string type = trim(field("elementtype").value_or(""));
+    static const char* const kScalarTypes[] = {"MET_CHAR", "MET_UCHAR", "MET_SHORT", "MET_USHORT", "MET_INT",
+                                               "MET_UINT", "MET_LONG", "MET_ULONG", "MET_LONG_LONG",
+                                               "MET_ULONG_LONG", "MET_FLOAT", "MET_DOUBLE"};
+    if (std::none_of(std::begin(kScalarTypes), std::end(kScalarTypes), [&](const char* t) { return type == t; }))
+      refuse(path, "ElementType = " + shownValue(type) + " is not one number per voxel (MET_SHORT, MET_FLOAT, ...)");
+  }
   if (const auto v = field("elementnumberofchannels")) {
     const auto c = toInteger(trim(*v));
     if (!c || *c != 1)
