@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <climits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <unistd.h>
@@ -24,6 +25,11 @@ int main(int argc, char** argv) {
   folder.erase(folder.rfind('/'));
   const bool drr = argc > 1 && std::strcmp(argv[1], "drr") == 0;
   const std::string program = folder + "/../libexec/cementsph/" + (drr ? "cementsph-drr" : "cementsph-all");
+  // OpenMP threads wait passively (sleep at a barrier) unless the user says otherwise: with spinning waits, a
+  // thread whose core another program holds stalls the whole team, and `--threads 2` on a busy 2-core machine
+  // ran 5-10x slower than one thread (BENCHMARKS.md, "Threads"). Set before the program starts: libgomp
+  // reads it once, when it loads.
+  setenv("OMP_WAIT_POLICY", "PASSIVE", 0);
   execv(program.c_str(), argv);
   std::fprintf(stderr, "cementsph: cannot run %s: %s; rebuild, or reinstall with cmake --install\n",
                program.c_str(), std::strerror(errno));
