@@ -454,4 +454,26 @@ TEST(HostileDicom, ShortPixelDataIsRefusedNamingTheSlice) {
   expectSeriesRefused(dir / "series", slice, "pixel data holds");
 }
 
+// A slice whose Rescale Slope is 0 (every voxel would be the intercept) or not a number, or whose
+// Intercept is not a number: its HU are unknown. Refused naming the slice. Values patched in place, same
+// length (DICOM pads DS values to an even length).
+TEST(HostileDicom, RescaleThatIsNotAFiniteNonZeroNumberIsRefused) {
+  for (const auto& [tag, from, to] : {std::tuple{std::string("\x28\x00\x53\x10", 4), std::string("1 "), std::string("0 ")},
+                                      std::tuple{std::string("\x28\x00\x53\x10", 4), std::string("1 "), std::string("x ")},
+                                      std::tuple{std::string("\x28\x00\x52\x10", 4), std::string("-1024 "), std::string("nan   ")},
+                                      std::tuple{std::string("\x28\x00\x52\x10", 4), std::string("-1024 "), std::string("1e999 ")}}) {
+    const fs::path dir = scratch("dicom-rescale");
+    writeDicomSeries(testImage(), (dir / "series").string(), -1024.0);
+    const fs::path slice = sliceFiles(dir / "series")[1];
+    std::string bytes = readAll(slice);
+    const auto at = bytes.find(tag);
+    ASSERT_NE(at, std::string::npos);
+    const auto value = bytes.find(from, at + 4);
+    ASSERT_LT(value, at + 12) << "the value follows its tag";
+    bytes.replace(value, from.size(), to);
+    writeFile(slice, bytes);
+    expectSeriesRefused(dir / "series", slice, "Rescale");
+  }
+}
+
 } // namespace

@@ -189,6 +189,8 @@ std::optional<DicomHeader> readDicomHeader(const std::string& path) {
     h.position = numbers<3>(value(0x0020, 0x0032));
     h.orientation = numbers<6>(value(0x0020, 0x0037));
     h.pixelSpacing = numbers<2>(value(0x0028, 0x0030));
+    h.rescaleSlope = value(0x0028, 0x1053);
+    h.rescaleIntercept = value(0x0028, 0x1052);
     h.hasPixelData = ds.FindDataElement(kPixelData);
     if (h.hasPixelData && !meta.GetDataSetTransferSyntax().IsEncapsulated() && h.rows > 0 && h.columns > 0 &&
         h.bitsAllocated > 0) {
@@ -234,6 +236,19 @@ std::string ctSliceProblem(const DicomHeader& h) {
            std::to_string(h.columns) + " columns need " + std::to_string(h.pixelDataBytesNeeded) +
            " (truncated or damaged slice); export the series again";
   if (!h.hasPixelData) return "no pixel data, or fewer bytes than its rows and columns need (truncated?)";
+  // HU = Rescale Slope x stored value + Rescale Intercept: a slope that is not a number, or zero (every
+  // voxel the intercept), or an intercept that is not a number makes every HU of the slice wrong.
+  if (!h.rescaleSlope.empty() || !h.rescaleIntercept.empty()) {
+    const auto slope = numbers<1>(h.rescaleSlope.empty() ? "1" : h.rescaleSlope);
+    const auto intercept = numbers<1>(h.rescaleIntercept.empty() ? "0" : h.rescaleIntercept);
+    if (!slope || (*slope)[0] == 0 || !intercept) {
+      std::string shown = "Rescale Slope '" + h.rescaleSlope.substr(0, 20) + "', Rescale Intercept '" +
+                          h.rescaleIntercept.substr(0, 20) + "'";
+      for (char& c : shown)
+        if (static_cast<unsigned char>(c) < 32) c = '?';
+      return shown + ": not finite numbers with a non-zero slope, so its HU are unknown (damaged header?)";
+    }
+  }
   if (h.rows < 2 || h.columns < 2) return "has no usable image size (rows " + std::to_string(h.rows) + ", columns " +
                                           std::to_string(h.columns) + ")";
   if (!h.position || !h.orientation || !h.pixelSpacing)

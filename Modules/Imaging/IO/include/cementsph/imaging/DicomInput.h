@@ -24,6 +24,7 @@ struct DicomHeader {
   bool hasPixelData = false;
   // Uncompressed pixel data: the element's length and what rows x columns x samples x bytes x frames need.
   std::uintmax_t pixelDataBytes = 0, pixelDataBytesNeeded = 0;
+  std::string rescaleSlope, rescaleIntercept; // (0028,1053), (0028,1052) as written; empty when absent
   std::optional<std::array<double, 3>> position;    // Image Position (Patient), mm
   std::optional<std::array<double, 6>> orientation; // Image Orientation (Patient): row, column cosines
   std::optional<std::array<double, 2>> pixelSpacing; // mm: between rows, between columns
