@@ -36,6 +36,8 @@
 //  9. Air: HU < air_max_hu; everything else: other soft tissue.
 // Assumptions: the region holds the target vertebra with soft tissue around; the spine runs along patient z
 // within 45 degrees; the basivertebral vein inside the body is bone-band HU and belongs to the target.
+// Cost: linear in the voxels, about 2 s for 6.4 million (0.5 mm voxels over 100 x 100 x 80 mm, one core):
+// pass a region around the tip (a vertebra and its discs fit in 100 mm), not a whole scan.
 #pragma once
 
 #include <nlohmann/json.hpp>
