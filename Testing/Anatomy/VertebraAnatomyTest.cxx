@@ -248,24 +248,26 @@ TEST(VertebraAnatomy, TheDefaultPhantomUnderTheBoneRule) {
   EXPECT_EQ(disc, 0u);
 }
 
-// A pure permutation of the grid's axes (the CT stored z-fastest, its direction saying so) gives the same class
-// in every voxel: the rule follows the patient's axes, not the array's.
-TEST(VertebraAnatomy, APermutedGridGivesTheSameClasses) {
+// A permutation and a flip of the grid's axes (the CT stored z-fastest and right-to-left, its direction saying
+// so) give the same class in every voxel: the rule follows the patient's axes, not the array's.
+TEST(VertebraAnatomy, APermutedFlippedGridGivesTheSameClasses) {
   const auto& s = scene();
   const int nx = s.grid.size[0], ny = s.grid.size[1], nz = s.grid.size[2];
-  anatomy::Grid g; // index axes (z, x, y): column 0 is patient z, 1 is x, 2 is y
+  anatomy::Grid g; // index axes (z, -x, y): column 0 is patient z, 1 is -x, 2 is y
   g.size = {nz, nx, ny};
   g.spacingMm = {s.grid.spacingMm[2], s.grid.spacingMm[0], s.grid.spacingMm[1]};
-  g.originMm = s.grid.originMm;
-  g.direction = {0, 1, 0, 0, 0, 1, 1, 0, 0};
+  g.originMm = s.grid.centreMm(nx - 1, 0, 0);
+  g.direction = {0, -1, 0, 0, 0, 1, 1, 0, 0};
   std::vector<float> hu(s.hu.size());
   auto old = [&](int i, int j, int k) { return std::size_t(i) + std::size_t(nx) * (std::size_t(j) + std::size_t(ny) * std::size_t(k)); };
-  auto neu = [&](int i, int j, int k) { return std::size_t(k) + std::size_t(nz) * (std::size_t(i) + std::size_t(nx) * std::size_t(j)); };
+  auto neu = [&](int i, int j, int k) {
+    return std::size_t(k) + std::size_t(nz) * (std::size_t(nx - 1 - i) + std::size_t(nx) * std::size_t(j));
+  };
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) hu[neu(i, j, k)] = s.hu[old(i, j, k)];
   // The same voxel, the same place.
-  for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.centreMm(4, 5, 6)[a], s.grid.centreMm(5, 6, 4)[a], 1e-12);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.centreMm(4, 5, 6)[a], s.grid.centreMm(nx - 1 - 5, 6, 4)[a], 1e-12);
   const auto a = anatomy::classifyAnatomyFromCT(hu.data(), g, s.truth->c, s.ao);
   std::size_t differ = 0;
   for (int k = 0; k < nz; ++k)
