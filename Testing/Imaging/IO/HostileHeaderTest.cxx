@@ -329,6 +329,17 @@ TEST(HostileNifti, NonFiniteOrientationAndSpacingAreRefused) {
   // sform_code (254) = 1 with a NaN in srow_x (280); qform_code (252) = 1 with a NaN quatern_b (256).
   expectRefused(nii.withTwo(254, 1, 280, nan), "sform");
   expectRefused(nii.withTwo(254, 1, 300, inf), "sform");
+  {
+    // srow_x = (0.5, 0.5, 0), srow_y = (0, 0, 0), srow_z = (0, 0, 0.5): the axes (columns) i and j are both
+    // (0.5, 0, 0), parallel, though neither is zero.
+    std::string b = nii.bytes();
+    const std::int16_t one = 1;
+    const float rows[12] = {0.5f, 0.5f, 0, 0, 0, 0, 0, 0, 0, 0, 0.5f, 0};
+    std::memcpy(&b[254], &one, 2);
+    std::memcpy(&b[280], rows, sizeof rows);
+    writeFile(dir / "parallel.nii", b);
+    expectRefused(dir / "parallel.nii", "parallel");
+  }
   expectRefused(nii.withTwo(252, 1, 256, nan), "qform");
   expectRefused(nii.withTwo(252, 1, 272, inf), "qform");
   // pixdim[1..3] (80, 84, 88): nifti_io would make each of these 1 mm.

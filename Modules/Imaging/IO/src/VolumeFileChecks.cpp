@@ -760,10 +760,17 @@ void checkNifti(const std::string& path) {
     for (std::size_t k = 0; k < 12; ++k) m[k] = floatAt(280 + 4 * k);
     for (double x : m)
       if (!std::isfinite(x)) refuse(path, "NIfTI sform (srow_x/y/z) is not finite (damaged header?); the orientation is unknown");
+    // Each axis scaled to unit length (overflow-safe), then the determinant: parallel axes are no orientation.
+    double u[3][3];
     for (int c = 0; c < 3; ++c) {
       const double axis[3] = {m[c], m[4 + c], m[8 + c]};
-      if (!(scaledNorm(axis, 3) > 0)) refuse(path, "NIfTI sform has a zero axis (damaged header?)");
+      const double length = scaledNorm(axis, 3);
+      if (!(length > 0) || !std::isfinite(length)) refuse(path, "NIfTI sform has a zero axis (damaged header?)");
+      for (int r = 0; r < 3; ++r) u[c][r] = axis[r] / length;
     }
+    const double det = u[0][0] * (u[1][1] * u[2][2] - u[1][2] * u[2][1]) - u[0][1] * (u[1][0] * u[2][2] - u[1][2] * u[2][0]) +
+                       u[0][2] * (u[1][0] * u[2][1] - u[1][1] * u[2][0]);
+    if (!(std::abs(det) > 1e-6)) refuse(path, "NIfTI sform's axes are parallel (singular; damaged header?)");
   }
   const double slope = floatAt(112), intercept = floatAt(116);
   if (!std::isfinite(slope) || !std::isfinite(intercept))
