@@ -82,6 +82,7 @@ public:
   void report(InjectionSummary& s, nlohmann::json& e) const override {
     s.steps = std::size_t(std::lround(t_)); // not a figure the test checks
     e["toy_fills_voxels_nearest_first"] = true;
+    s.leakageSites.push_back({{1.0, 2.0, 3.0}, 0.5, 0.001, "disc"}); // a site for the Slicer file to list
     if (fault_ == Fault::NonFiniteFigure) e["toy_figure_pa"] = std::numeric_limits<double>::quiet_NaN();
     if (fault_ == Fault::ClaimsADriverKey) e["cement_volume_ml"] = 0.0;
   }
@@ -185,6 +186,31 @@ TEST(InjectionModel, ARegisteredToyRunsThroughTheOneDriver) {
   EXPECT_NEAR(addedHu, 160 * 3000.0, 1.0);
   EXPECT_TRUE(fs::exists(out / "metrics.json"));
   EXPECT_TRUE(fs::exists(out / "tip_pressure.csv"));
+
+  // 3D Slicer's files: the tip and the trajectory's entry, a cannula length (5 mm) behind it along the scene's
+  // direction (0, 0, 1), in LPS mm; the toy's one leak site; the label map's colours.
+  std::ifstream markupsFile(out / "injection.mrk.json");
+  const auto markups = nlohmann::json::parse(markupsFile);
+  EXPECT_NE(markups.at("@schema").get<std::string>().find("markups-schema"), std::string::npos);
+  const auto& tip = markups.at("markups").at(0);
+  EXPECT_EQ(tip.at("type"), "Fiducial");
+  EXPECT_EQ(tip.at("coordinateSystem"), "LPS");
+  EXPECT_EQ(tip.at("controlPoints").at(0).at("position"), nlohmann::json::parse("[13.0, 13.0, 13.0]"));
+  const auto& line = markups.at("markups").at(1);
+  EXPECT_EQ(line.at("type"), "Line");
+  EXPECT_EQ(line.at("controlPoints").at(0).at("position"), nlohmann::json::parse("[13.0, 13.0, 8.0]"));
+  std::ifstream leaksFile(out / "leak_sites.mrk.json");
+  const auto leaks = nlohmann::json::parse(leaksFile).at("markups").at(0).at("controlPoints");
+  ASSERT_EQ(leaks.size(), 1u);
+  EXPECT_EQ(leaks.at(0).at("position"), nlohmann::json::parse("[1.0, 2.0, 3.0]"));
+  EXPECT_NE(leaks.at(0).at("label").get<std::string>().find("disc"), std::string::npos);
+  std::ifstream colours(out / "cement_labels.ctbl");
+  std::string line1, line2, line3;
+  std::getline(colours, line1);
+  std::getline(colours, line2), std::getline(colours, line2);
+  std::getline(colours, line3);
+  EXPECT_EQ(line2.rfind("1 ", 0), 0u) << line2;
+  EXPECT_EQ(line3.rfind("2 ", 0), 0u) << line3;
 }
 
 TEST(InjectionModel, AnUnknownNameIsOneLineListingTheModels) {

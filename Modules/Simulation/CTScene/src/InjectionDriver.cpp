@@ -8,6 +8,7 @@
 #include "cementsph/scene/ModelSelection.h"
 #include "cementsph/scene/PorousSolid.h"
 #include "cementsph/scene/SimulatedCT.h"
+#include "cementsph/scene/SlicerFiles.h"
 #include "cementsph/sph/Presets.h"
 #include "cementsph/sph/Simulation.h"
 
@@ -217,8 +218,13 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
     throw sph::SimulationError("inject: the run's figure " + bad + " is not a finite number (the run went wrong; "
                                "try a smaller flow rate or particle radius, or report the scene)");
   if (writer.writing()) model->writeFiles(o.outDir, result.simulatedCt);
+  // For 3D Slicer (SlicerFiles.h): the tip and trajectory, the leak sites, the label map's colours.
+  const std::vector<std::pair<std::string, std::string>> slicerFiles{
+      {"injection.mrk.json", injectionMarkups(*scene.tipMm, scene.direction, scene.cannulaLengthMm).dump(2) + "\n"},
+      {"leak_sites.mrk.json", leakSiteMarkups(s.leakageSites).dump(2) + "\n"},
+      {"cement_labels.ctbl", cementLabelColourTable()}};
   writer.finish(model->time(), result.particles, result.simulatedCt, result.tipSeries, model->pressureBaselinePa(),
-                result.metrics);
+                result.metrics, slicerFiles);
   return result;
 }
 

@@ -86,7 +86,8 @@ void InjectionWriter::snapshot(double time, vtkPolyData* particles, const imagin
 }
 
 void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,
-                             const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, json& metrics) {
+                             const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, json& metrics,
+                             const std::vector<std::pair<std::string, std::string>>& textFiles) {
   if (!writing()) return;
   snapshot(time, particles, simulatedCt);
   const fs::path out(outDir_);
@@ -105,6 +106,7 @@ void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging:
                                  "last frame is simulated_ct.nrrd"}};
     imaging::writeTextAtomically((out / "sequence.json").string(), sequence.dump(2) + "\n");
   }
+  for (const auto& [name, text] : textFiles) imaging::writeTextAtomically((out / name).string(), text);
   imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
   finished_ = true;
 }

@@ -46,9 +46,10 @@ public:
   // particles_NNNN.vtp (and simulated_ct_NNNN.nrrd: `ctNow` if given, else made) at time [s].
   void snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow = nullptr);
   // The last snapshot (the final state), particles.pvd, tip_pressure.csv, simulated_ct.nrrd, scene.json,
-  // sequence.json, then metrics.json (with the snapshot counts added).
+  // sequence.json, the text files (name, content) given, then metrics.json (with the snapshot counts added).
   void finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,
-              const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, nlohmann::json& metrics);
+              const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, nlohmann::json& metrics,
+              const std::vector<std::pair<std::string, std::string>>& textFiles = {});
 
 private:
   void ctFrame(double time, const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now);
