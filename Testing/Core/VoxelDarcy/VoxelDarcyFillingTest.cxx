@@ -5,10 +5,16 @@
 //    source is p(a) + mu Q / (20 pi k a) (div q = s inside it), i.e. mu Q / (4 pi k) (1.2 / a - 1 / R);
 //  * on an impermeable plane the same source fills a hemisphere of radius 2^(1/3) R;
 //  * the pressure is proportional to the viscosity and the cement's shape does not depend on it;
-//  * the cement's volume is the injected volume at every step.
+//  * the cement's volume is the injected volume at every step;
+//  * the preconditioned solver (MIC(0) conjugate gradient) against a direct solve (Eigen's SimplicialLDLT),
+//    and the whole step's pressure against a system assembled here, densely, from the fill it started from;
+//  * the active-set bookkeeping (issue 23) against dense passes over every voxel: the cement volume, the
+//    voxels with cement, the viscosity after a change, and the same fill in a region three times as wide.
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
 #include "cementsph/sph/Viscosity/Rheology.h"
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -245,6 +251,208 @@ TEST(VoxelDarcyFilling, ViscosityBoundsHoldAndNothingIsNaNAtExtremeFlowIndices) 
     }
     EXPECT_TRUE(std::isfinite(run.filling.sourcePressure()) && run.filling.sourcePressure() > 0);
   }
+}
+
+// A heterogeneous medium around the origin: k log-uniform over two decades, 10 % solid voxels (not the centre).
+VoxelMedium heterogeneous(int size, unsigned seed) {
+  const double h = 0.5e-3;
+  VoxelMedium m = VoxelMedium::uniform({size, size, size}, Eigen::Vector3d::Constant(-(size / 2) * h),
+                                       Eigen::Vector3d::Constant(h), 0.8, kK);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (std::size_t c = 0; c < m.count(); ++c) {
+    m.permeability[c] = kK * std::pow(10.0, 2 * u(rng) - 1);
+    const auto v = m.ijk(c);
+    if (u(rng) < 0.1 && v != std::array<int, 3>{size / 2, size / 2, size / 2}) m.porosity[c] = 0.0f;
+  }
+  return m;
+}
+
+// The pressure system a step solves, assembled densely (every voxel visited) from the state before the
+// step: unknowns the filled voxels; two-point fluxes with harmonic-mean mobility; ghost-fluid faces to the
+// front voxels at p = 0, f of the way across; the flow rate over the filled outlet voxels by pore volume.
+Eigen::VectorXd directPressure(const VoxelMedium& m, const std::vector<std::uint8_t>& filled, const std::vector<double>& fill,
+                               const std::vector<std::size_t>& source, double mu, double flowRate,
+                               std::vector<int>& unknown) {
+  const std::size_t n = m.count();
+  unknown.assign(n, -1);
+  int rows = 0;
+  for (std::size_t c = 0; c < n; ++c)
+    if (filled[c]) unknown[c] = rows++;
+  double sourcePore = 0;
+  for (std::size_t c : source)
+    if (filled[c]) sourcePore += m.porosity[c];
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(rows);
+  const double h = m.spacing[0], area = h * h;
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!filled[c]) continue;
+    const auto v = m.ijk(c);
+    const double lc = m.permeability[c] / mu;
+    for (int a = 0; a < 3; ++a)
+      for (int s : {-1, 1}) {
+        std::array<int, 3> w = v;
+        w[std::size_t(a)] += s;
+        if (w[std::size_t(a)] < 0 || w[std::size_t(a)] >= m.size[a]) continue;
+        const std::size_t o = m.index(w[0], w[1], w[2]);
+        if (m.porosity[o] <= 0) continue;
+        const double lo = m.permeability[o] / mu;
+        const double t = filled[o] ? area * 2 * lc * lo / ((lc + lo) * h) : area / (0.5 * h / lc + fill[o] * h / lo);
+        entries.emplace_back(unknown[c], unknown[c], t);
+        if (filled[o]) entries.emplace_back(unknown[c], unknown[o], -t);
+      }
+    if (std::find(source.begin(), source.end(), c) != source.end() && sourcePore > 0)
+      b[unknown[c]] += flowRate * m.porosity[c] / sourcePore;
+  }
+  Eigen::SparseMatrix<double> A(rows, rows);
+  A.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  EXPECT_EQ(ldlt.info(), Eigen::Success);
+  return ldlt.solve(b);
+}
+
+TEST(VoxelDarcySolver, MicConjugateGradientMatchesADirectSolve) {
+  // A 7-point system with varying coefficients, a few Dirichlet faces, and a region of pure Neumann rows.
+  const int nx = 12, ny = 10, nz = 9;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  PressureSystem A;
+  std::vector<Eigen::Triplet<double>> entries;
+  auto id = [&](int i, int j, int k) { return i + nx * (j + ny * k); };
+  std::vector<double> tx(std::size_t(nx * ny * nz)), ty(tx.size()), tz(tx.size());
+  for (auto* t : {&tx, &ty, &tz})
+    for (double& e : *t) e = std::pow(10.0, 2 * u(rng));
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const int row = id(i, j, k);
+        double diagonal = i == 0 ? 5.0 : 0.0; // Dirichlet on the x = 0 side
+        std::vector<std::pair<int, double>> cols;
+        auto link = [&](int ii, int jj, int kk, double t) {
+          if (ii < 0 || jj < 0 || kk < 0 || ii >= nx || jj >= ny || kk >= nz) return;
+          cols.push_back({id(ii, jj, kk), -t});
+          diagonal += t;
+        };
+        link(i, j, k - 1, tz[std::size_t(id(i, j, k - 1 < 0 ? 0 : k - 1))]);
+        link(i, j - 1, k, ty[std::size_t(id(i, j - 1 < 0 ? 0 : j - 1, k))]);
+        link(i - 1, j, k, tx[std::size_t(id(i - 1 < 0 ? 0 : i - 1, j, k))]);
+        link(i + 1, j, k, tx[std::size_t(row)]);
+        link(i, j + 1, k, ty[std::size_t(row)]);
+        link(i, j, k + 1, tz[std::size_t(row)]);
+        cols.push_back({row, diagonal});
+        std::sort(cols.begin(), cols.end());
+        for (const auto& [col, val] : cols) {
+          if (col == row) A.diagonal.push_back(int(A.column.size()));
+          A.column.push_back(col);
+          A.value.push_back(val);
+          entries.emplace_back(row, col, val);
+        }
+        A.rowStart.push_back(int(A.column.size()));
+      }
+  const int n = A.rows();
+  Eigen::SparseMatrix<double> S(n, n);
+  S.setFromTriplets(entries.begin(), entries.end());
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) b[i] = u(rng) - 0.3;
+  const Eigen::VectorXd direct = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(S).solve(b);
+  PressureSolver solver;
+  for (double tolerance : {1e-6, 1e-12}) {
+    Eigen::VectorXd x; // no guess
+    const PressureSolver::Result r = solver.solve(A, b, x, tolerance, 1000);
+    const double error = (x - direct).lpNorm<Eigen::Infinity>() / direct.lpNorm<Eigen::Infinity>();
+    std::printf("MIC(0) CG, tolerance %.0e: %d iterations (of %d unknowns), residual %.2e, error %.2e\n", tolerance,
+                r.iterations, n, r.relativeResidual, error);
+    EXPECT_TRUE(r.converged);
+    EXPECT_LE(r.relativeResidual, tolerance);
+    EXPECT_LT(error, tolerance * 1e3);
+    // A warm start from the answer takes no iteration.
+    const PressureSolver::Result again = solver.solve(A, b, x, tolerance, 1000);
+    EXPECT_EQ(again.iterations, 0);
+  }
+}
+
+TEST(VoxelDarcySolver, EachStepsPressureIsTheDirectSolutionOfItsSystem) {
+  const VoxelMedium m = heterogeneous(25, 11);
+  VoxelDarcyFilling filling(m);
+  filling.setSource(Eigen::Vector3d::Zero(), 1.0e-3);
+  filling.setViscosity(kMu);
+  double worst = 0;
+  for (int step = 0; step < 40; ++step) {
+    std::vector<std::uint8_t> filled(m.count());
+    for (std::size_t c = 0; c < m.count(); ++c) filled[c] = filling.filled(c);
+    const std::vector<double> fill = filling.fill();
+    filling.step(kQ, 0.2);
+    std::vector<int> unknown;
+    const Eigen::VectorXd direct = directPressure(m, filled, fill, filling.sourceVoxels(), kMu, kQ, unknown);
+    if (direct.size() == 0) continue;
+    double largest = direct.lpNorm<Eigen::Infinity>(), error = 0;
+    for (std::size_t c = 0; c < m.count(); ++c)
+      if (unknown[c] >= 0) error = std::max(error, std::abs(filling.pressure()[c] - direct[unknown[c]]));
+    worst = std::max(worst, error / largest);
+    ASSERT_LT(error, 1e-4 * largest) << "step " << step << ": " << direct.size() << " unknowns";
+  }
+  std::printf("each step's pressure against the direct solve: worst %.2e of the largest pressure (%zu filled voxels)\n",
+              worst, filling.statistics().lastUnknowns);
+}
+
+TEST(VoxelDarcySolver, ActiveSetBookkeepingAgreesWithDensePassesAndTheRegionDoesNotMatter) {
+  // The same 21^3 medium alone and in the middle of a 63^3 region of more pore space that the cement never reaches.
+  const VoxelMedium small = heterogeneous(21, 5);
+  VoxelMedium large = heterogeneous(63, 6);
+  for (std::size_t c = 0; c < small.count(); ++c) {
+    const auto v = small.ijk(c);
+    const std::size_t o = large.index(v[0] + 21, v[1] + 21, v[2] + 21);
+    large.porosity[o] = small.porosity[c];
+    large.permeability[o] = small.permeability[c];
+  }
+  VoxelDarcyFilling a(small), b(large);
+  for (VoxelDarcyFilling* f : {&a, &b}) {
+    f->setSource(Eigen::Vector3d::Zero(), 1.05e-3); // 2.1 voxels: no centre on the sphere, whatever the round-off
+    f->setViscosity(kMu);
+  }
+  const double volume = 0.04e-6; // 40 mm^3: well inside the small region
+  for (int step = 0; step < 100000 && a.time() < volume / kQ * (1 - 1e-12); ++step) {
+    const double mu = step < 10 ? kMu : 2 * kMu; // a viscosity change on the way
+    a.setViscosity(mu);
+    b.setViscosity(mu);
+    const double dt = std::min(volume / kQ - a.time(), 0.05);
+    a.step(kQ, dt);
+    b.step(kQ, dt);
+    ASSERT_EQ(a.time(), b.time()) << "step " << step;
+  }
+  ASSERT_EQ(a.statistics().steps, b.statistics().steps);
+  // Dense passes over every voxel of the small run.
+  double dense = 0, worstFill = 0;
+  int wet = 0;
+  for (std::size_t c = 0; c < small.count(); ++c) {
+    const auto v = small.ijk(c);
+    const std::size_t o = large.index(v[0] + 21, v[1] + 21, v[2] + 21);
+    const double f = a.fill()[c];
+    dense += f * small.porosity[c] * small.voxelVolume();
+    worstFill = std::max(worstFill, std::abs(f - b.fill()[o]));
+    ASSERT_EQ(f > 0, a.arrivalTime()[c] >= 0) << "voxel " << c;
+    if (f > 0) {
+      ++wet;
+      ASSERT_EQ(a.viscosity()[c], 2 * kMu) << "voxel " << c << " holds cement at the old viscosity";
+      ASSERT_EQ(a.filled(c), b.filled(o));
+    }
+    // Nothing reached the small region's sides.
+    if (v[0] == 0 || v[1] == 0 || v[2] == 0 || v[0] == 20 || v[1] == 20 || v[2] == 20) {
+      ASSERT_EQ(f, 0.0);
+    }
+  }
+  double outside = 0;
+  for (std::size_t o = 0; o < large.count(); ++o) {
+    const auto v = large.ijk(o);
+    if (v[0] < 21 || v[1] < 21 || v[2] < 21 || v[0] >= 42 || v[1] >= 42 || v[2] >= 42) outside += b.fill()[o];
+  }
+  std::printf("active set: %d voxels with cement, fill differs by %.2e between the regions\n", wet, worstFill);
+  EXPECT_GT(wet, 100);
+  EXPECT_NEAR(a.cementVolume(), dense, 1e-12 * volume);
+  EXPECT_NEAR(a.cementVolume(), volume, 1e-9 * volume);
+  EXPECT_EQ(outside, 0.0);
+  EXPECT_LT(worstFill, 1e-6);
+  EXPECT_NEAR(a.sourcePressure(), b.sourcePressure(), 1e-6 * a.sourcePressure());
 }
 
 } // namespace

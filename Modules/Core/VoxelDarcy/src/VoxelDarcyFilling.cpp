@@ -2,9 +2,6 @@
 
 #include "cementsph/sph/Viscosity/Rheology.h"
 
-#include <Eigen/IterativeLinearSolvers>
-#include <Eigen/SparseCore>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -35,6 +32,166 @@ VoxelMedium VoxelMedium::uniform(std::array<int, 3> size, const Eigen::Vector3d&
   m.porosity.assign(m.count(), float(porosity));
   m.permeability.assign(m.count(), permeability);
   return m;
+}
+
+void PressureSystem::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  const int n = rows();
+  y.resize(n);
+  const int* start = rowStart.data();
+  const int* col = column.data();
+  const double* val = value.data();
+  for (int i = 0; i < n; ++i) {
+    double sum = 0;
+    for (int e = start[i]; e < start[i + 1]; ++e) sum += val[e] * x[col[e]];
+    y[i] = sum;
+  }
+}
+
+// The solver works on a padded copy of the matrix (ELLPACK: every row the same number of lower and upper
+// slots, an empty slot pointing at the extra zero entry n of the vectors): fixed-length inner loops
+// without unpredictable branches, which matters in the sequential triangular sweeps on a porous geometry.
+void PressureSolver::pad(const PressureSystem& A) {
+  const int n = A.rows();
+  lowerWidth_ = upperWidth_ = 0;
+  for (int i = 0; i < n; ++i) {
+    lowerWidth_ = std::max(lowerWidth_, A.diagonal[std::size_t(i)] - A.rowStart[std::size_t(i)]);
+    upperWidth_ = std::max(upperWidth_, A.rowStart[std::size_t(i) + 1] - A.diagonal[std::size_t(i)] - 1);
+  }
+  lowerColumn_.assign(std::size_t(n) * std::size_t(lowerWidth_), n);
+  lowerValue_.assign(lowerColumn_.size(), 0.0);
+  upperColumn_.assign(std::size_t(n) * std::size_t(upperWidth_), n);
+  upperValue_.assign(upperColumn_.size(), 0.0);
+  diagonalValue_.resize(std::size_t(n));
+  for (int i = 0; i < n; ++i) {
+    const int d = A.diagonal[std::size_t(i)];
+    diagonalValue_[std::size_t(i)] = A.value[std::size_t(d)];
+    std::size_t slot = std::size_t(i) * std::size_t(lowerWidth_);
+    for (int e = A.rowStart[std::size_t(i)]; e < d; ++e, ++slot) {
+      lowerColumn_[slot] = A.column[std::size_t(e)];
+      lowerValue_[slot] = A.value[std::size_t(e)];
+    }
+    slot = std::size_t(i) * std::size_t(upperWidth_);
+    for (int e = d + 1; e < A.rowStart[std::size_t(i) + 1]; ++e, ++slot) {
+      upperColumn_[slot] = A.column[std::size_t(e)];
+      upperValue_[slot] = A.value[std::size_t(e)];
+    }
+  }
+}
+
+template <int L, int U>
+void PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
+  const int wl = L > 0 ? L : lowerWidth_, wu = U > 0 ? U : upperWidth_;
+  const int* lc = lowerColumn_.data();
+  const double* lv = lowerValue_.data();
+  const int* uc = upperColumn_.data();
+  const double* uv = upperValue_.data();
+  const double* dv = diagonalValue_.data();
+  for (int i = 0; i < n; ++i) {
+    double sum = dv[i] * x[i];
+    for (int e = 0; e < wl; ++e) sum += lv[i * wl + e] * x[lc[i * wl + e]];
+    for (int e = 0; e < wu; ++e) sum += uv[i * wu + e] * x[uc[i * wu + e]];
+    y[i] = sum;
+  }
+}
+
+// MIC(0) as L D L^T with L = I + (strictly lower part of A) D^-1: pivot d_i = a_ii - sum over the lower
+// neighbours k of a_ik^2 / d_k + tau a_ik (the rest of row k's upper part) / d_k, the dropped fill moved
+// onto the diagonal (tau 0.97); a pivot below 0.25 a_ii (a nearly singular row) falls back to a_ii.
+void PressureSolver::factor(const PressureSystem& A) {
+  constexpr double tau = 0.97, safety = 0.25;
+  const int n = A.rows();
+  pivot_.resize(n);
+  inversePivot_.resize(n);
+  upperSum_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const double diagonal = A.value[std::size_t(A.diagonal[std::size_t(i)])];
+    double e = diagonal;
+    for (int k = A.rowStart[std::size_t(i)]; k < A.diagonal[std::size_t(i)]; ++k) {
+      const int j = A.column[std::size_t(k)];
+      const double a = A.value[std::size_t(k)];
+      e -= (a * a + tau * a * (upperSum_[j] - a)) / pivot_[j];
+    }
+    if (!(e >= safety * diagonal)) e = diagonal;
+    pivot_[i] = e;
+    inversePivot_[i] = 1.0 / e;
+    double upper = 0;
+    for (int k = A.diagonal[std::size_t(i)] + 1; k < A.rowStart[std::size_t(i) + 1]; ++k) upper += A.value[std::size_t(k)];
+    upperSum_[i] = upper;
+  }
+}
+
+// z = (L D L^T)^-1 r: forward sweep y_i = r_i - sum_k a_ik y_k / d_k (kept as q_i = y_i / d_i), then
+// backward z_i = q_i - sum_j a_ij z_j / d_i over the upper neighbours. z[n] stays 0 (the empty slots').
+template <int L, int U>
+void PressureSolver::preconditionPadded(const double* r, double* z, int n) const {
+  const int wl = L > 0 ? L : lowerWidth_, wu = U > 0 ? U : upperWidth_;
+  const int* lc = lowerColumn_.data();
+  const double* lv = lowerValue_.data();
+  const int* uc = upperColumn_.data();
+  const double* uv = upperValue_.data();
+  const double* inverse = inversePivot_.data();
+  for (int i = 0; i < n; ++i) {
+    double t = r[i];
+    for (int e = 0; e < wl; ++e) t -= lv[i * wl + e] * z[lc[i * wl + e]];
+    z[i] = t * inverse[i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    double t = 0;
+    for (int e = 0; e < wu; ++e) t += uv[i * wu + e] * z[uc[i * wu + e]];
+    z[i] -= t * inverse[i];
+  }
+}
+
+PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                                             double tolerance, int maxIterations) {
+  pad(A);
+  if (lowerWidth_ == 3 && upperWidth_ == 3) return run<3, 3>(A, b, x, tolerance, maxIterations); // the voxels' 7 points
+  return run<0, 0>(A, b, x, tolerance, maxIterations);
+}
+
+template <int L, int U>
+PressureSolver::Result PressureSolver::run(const PressureSystem& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                                           double tolerance, int maxIterations) {
+  const int n = A.rows();
+  Result result;
+  if (x.size() != n) x = Eigen::VectorXd::Zero(n);
+  const double rhsNorm2 = b.squaredNorm();
+  if (rhsNorm2 == 0) {
+    x.setZero();
+    return result;
+  }
+  const double threshold = std::max(tolerance * tolerance * rhsNorm2, std::numeric_limits<double>::min());
+  // Vectors of n + 1: entry n is the empty slots' zero.
+  for (Eigen::VectorXd* v : {&r_, &z_, &p_, &q_}) v->setZero(n + 1);
+  Eigen::VectorXd& xs = x;
+  p_.head(n) = xs;
+  multiplyPadded<L, U>(p_.data(), q_.data(), n);
+  p_[n] = 0;
+  auto head = [n](Eigen::VectorXd& v) { return v.head(n); };
+  head(r_) = b - head(q_);
+  double r2 = head(r_).squaredNorm();
+  if (r2 >= threshold) {
+    factor(A);
+    preconditionPadded<L, U>(r_.data(), z_.data(), n);
+    head(p_) = head(z_);
+    double absNew = head(r_).dot(head(z_));
+    while (result.iterations < maxIterations) {
+      multiplyPadded<L, U>(p_.data(), q_.data(), n);
+      const double alpha = absNew / head(p_).dot(head(q_));
+      xs += alpha * head(p_);
+      head(r_) -= alpha * head(q_);
+      r2 = head(r_).squaredNorm();
+      ++result.iterations;
+      if (r2 < threshold) break;
+      preconditionPadded<L, U>(r_.data(), z_.data(), n);
+      const double absOld = absNew;
+      absNew = head(r_).dot(head(z_));
+      head(p_) = head(z_) + (absNew / absOld) * head(p_);
+    }
+  }
+  result.relativeResidual = std::sqrt(r2 / rhsNorm2);
+  result.converged = r2 < threshold;
+  return result;
 }
 
 VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings settings)
@@ -72,6 +229,7 @@ VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings setting
   faceFlux_.assign(3 * n, 0.0f);
   unknown_.assign(n, -1);
   barred_.assign(n, 0);
+  inFront_.assign(n, 0);
 }
 
 void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const std::vector<float>& porosity,
@@ -137,9 +295,7 @@ void VoxelDarcyFilling::setShearRateViscosity(std::function<double(double)> law,
 // Each filled voxel's viscosity at its Darcy-scale shear rate (the fluxes of the last solve); a voxel on
 // the front takes the viscosity of the cement flowing into it (the largest inflow's upstream voxel).
 void VoxelDarcyFilling::updateShearViscosity() {
-  const std::size_t n = medium_.count();
-  for (std::size_t c = 0; c < n; ++c) {
-    if (state_[c] != kFilled) continue;
+  for (std::size_t c : filled_) {
     const double q = darcyVelocity(c).norm();
     const double mu = shearLaw_(sph::darcyShearRate(q, medium_.permeability[c], medium_.porosity[c], flowIndex_));
     if (!(mu > 0) || !std::isfinite(mu))
@@ -148,8 +304,7 @@ void VoxelDarcyFilling::updateShearViscosity() {
   }
   const int nx = medium_.size[0], ny = medium_.size[1];
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
-  for (std::size_t c = 0; c < n; ++c) {
-    if (state_[c] != kEmpty) continue;
+  for (std::size_t c : front_) {
     const auto v = medium_.ijk(c);
     double best = -1;
     for (int a = 0; a < 3; ++a)
@@ -167,20 +322,26 @@ void VoxelDarcyFilling::updateShearViscosity() {
   }
 }
 
+// One value for every voxel: kept as that value, written only on the voxels the cement reaches (those
+// with cement and the front now; the others as the cement reaches them: wet, markFilled, findFront).
 void VoxelDarcyFilling::setViscosity(double mu) {
   if (!(mu > 0) || !std::isfinite(mu)) throw std::invalid_argument("voxel Darcy: viscosity must be a positive number");
-  std::fill(viscosity_.begin(), viscosity_.end(), mu);
+  if (uniformViscosity_ && mu == viscosityValue_) return;
+  uniformViscosity_ = true;
+  viscosityValue_ = mu;
+  for (const auto* list : {&filled_, &newlyFilled_, &front_, &wet_})
+    for (std::size_t c : *list) viscosity_[c] = mu;
 }
 
 void VoxelDarcyFilling::setVoxelViscosity(std::vector<double> mu) {
   if (mu.size() != viscosity_.size()) throw std::invalid_argument("voxel Darcy: one viscosity per voxel");
   viscosity_ = std::move(mu);
+  uniformViscosity_ = false;
 }
 
 double VoxelDarcyFilling::cementVolume() const {
   double v = 0;
-  for (std::size_t c = 0; c < fill_.size(); ++c)
-    if (fill_[c] > 0) v += fill_[c] * poreVolume(c);
+  for (std::size_t c : wet_) v += fill_[c] * poreVolume(c);
   return v;
 }
 
@@ -214,6 +375,38 @@ void VoxelDarcyFilling::markFilled(std::size_t c) {
   state_[c] = kFilled;
   fill_[c] = 1.0;
   pressure_[c] = settings_.frontPressurePa; // warm start: the front's pressure, where it was
+  if (uniformViscosity_ && !shearLaw_) viscosity_[c] = viscosityValue_;
+  newlyFilled_.push_back(c);
+}
+
+void VoxelDarcyFilling::wet(std::size_t c) {
+  if (arrival_[c] >= 0) return;
+  arrival_[c] = time_;
+  wet_.push_back(c);
+  // (a shear-thinning run's front voxels already have their upstream viscosity)
+  if (uniformViscosity_ && (!shearLaw_ || !inFront_[c])) viscosity_[c] = viscosityValue_;
+}
+
+void VoxelDarcyFilling::findFront() {
+  for (std::size_t c : front_) inFront_[c] = 0;
+  front_.clear();
+  const int nx = medium_.size[0], ny = medium_.size[1];
+  const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
+  for (std::size_t c : filled_) {
+    const auto v = medium_.ijk(c);
+    for (int a = 0; a < 3; ++a)
+      for (int sign : {-1, 1}) {
+        const int coord = v[std::size_t(a)] + sign;
+        if (coord < 0 || coord >= medium_.size[a]) continue;
+        const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[a]);
+        if (state_[m] != kEmpty || inFront_[m]) continue;
+        inFront_[m] = 1;
+        front_.push_back(m);
+      }
+  }
+  std::sort(front_.begin(), front_.end());
+  if (uniformViscosity_ && !shearLaw_)
+    for (std::size_t m : front_) viscosity_[m] = viscosityValue_;
 }
 
 // Volume beyond a voxel's pore volume moves on to the nearest unfilled pore voxels, reached through
@@ -237,7 +430,7 @@ void VoxelDarcyFilling::depositExcess(std::size_t from, double volume) {
       if (state_[n] == kEmpty) {
         const double room = (1.0 - fill_[n]) * poreVolume(n);
         const double put = std::min(room, volume);
-        if (arrival_[n] < 0) arrival_[n] = time_;
+        wet(n);
         fill_[n] += put / poreVolume(n);
         volume -= put;
         if (fill_[n] >= 1.0 - 1e-12) markFilled(n);
@@ -258,12 +451,20 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   if (!(dtMax > 0) || !(flowRate >= 0)) throw std::invalid_argument("voxel Darcy: step needs dtMax > 0, flow rate >= 0");
   const auto t0 = Clock::now();
   const int nx = medium_.size[0], ny = medium_.size[1];
-  const std::size_t n = medium_.count();
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
 
-  // Unknowns: the filled voxels, numbered in voxel order (so each row's columns come out sorted).
-  int unknowns = 0;
-  for (std::size_t c = 0; c < n; ++c) unknown_[c] = state_[c] == kFilled ? unknowns++ : -1;
+  // Unknowns: the filled voxels, numbered in voxel order (so each row's columns come out sorted). The
+  // voxels filled since the last step are merged into the sorted list; a voxel never empties again.
+  if (!newlyFilled_.empty()) {
+    std::sort(newlyFilled_.begin(), newlyFilled_.end());
+    const std::size_t old = filled_.size();
+    filled_.insert(filled_.end(), newlyFilled_.begin(), newlyFilled_.end());
+    std::inplace_merge(filled_.begin(), filled_.begin() + std::ptrdiff_t(old), filled_.end());
+    newlyFilled_.clear();
+  }
+  const int unknowns = int(filled_.size());
+  for (int row = 0; row < unknowns; ++row) unknown_[filled_[std::size_t(row)]] = row;
+  findFront();
 
   // The source: spread over the filled outlet voxels by pore volume; while none is filled, the cement
   // goes straight into the outlet voxels.
@@ -273,8 +474,8 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   // Front links: (filled voxel, front voxel, transmissibility).
   struct Link { std::size_t from, to; double t; };
   std::vector<Link> links;
-  links.reserve(std::size_t(unknowns) / 2 + 64);
-  Eigen::SparseMatrix<double, Eigen::RowMajor, int> A(unknowns, unknowns);
+  links.reserve(front_.size() + 64);
+  PressureSystem& A = system_;
   Eigen::VectorXd b(unknowns), x(unknowns);
   const bool capillary = !entryPressure_.empty();
   auto frontPressure = [&](std::size_t m) {
@@ -285,15 +486,16 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   auto assemble = [&]() {
     links.clear();
     b.setZero();
-    A.resizeNonZeros(std::size_t(unknowns) * 7);
-    int* outer = A.outerIndexPtr();
-    int* inner = A.innerIndexPtr();
-    double* value = A.valuePtr();
+    A.rowStart.resize(std::size_t(unknowns) + 1);
+    A.diagonal.resize(std::size_t(unknowns));
+    A.column.resize(std::size_t(unknowns) * 7);
+    A.value.resize(std::size_t(unknowns) * 7);
+    int* inner = A.column.data();
+    double* value = A.value.data();
     int nnz = 0;
-    for (std::size_t c = 0; c < n; ++c) {
-      const int row = unknown_[c];
-      if (row < 0) continue;
-      outer[row] = nnz;
+    for (int row = 0; row < unknowns; ++row) {
+      const std::size_t c = filled_[std::size_t(row)];
+      A.rowStart[std::size_t(row)] = nnz;
       x[row] = pressure_[c];
       const auto v = medium_.ijk(c);
       const double lc = mobility(c);
@@ -331,29 +533,23 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
         }
       }
       value[diagonalAt] = diagonal;
+      A.diagonal[std::size_t(row)] = diagonalAt;
       if (filledSourcePore > 0 && std::binary_search(source_.begin(), source_.end(), c))
         b[row] += flowRate * poreVolume(c) / filledSourcePore;
     }
-    outer[unknowns] = nnz;
-    A.resizeNonZeros(nnz);
+    A.rowStart[std::size_t(unknowns)] = nnz;
   };
   double solveSeconds = 0;
   auto solve = [&]() {
     const auto ts = Clock::now();
-    using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-    Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper> cg;
-    cg.setTolerance(settings_.solverTolerance);
-    cg.setMaxIterations(settings_.maxSolverIterations);
-    cg.compute(A);
-    const Eigen::VectorXd p = cg.solveWithGuess(b, x);
+    const PressureSolver::Result r = solver_.solve(A, b, x, settings_.solverTolerance, settings_.maxSolverIterations);
     ++stats_.solves;
-    stats_.iterations += std::size_t(cg.iterations());
-    stats_.worstResidual = std::max(stats_.worstResidual, double(cg.error()));
-    if (cg.info() != Eigen::Success) ++stats_.unconverged;
-    if (!p.allFinite())
+    stats_.iterations += std::size_t(r.iterations);
+    stats_.worstResidual = std::max(stats_.worstResidual, r.relativeResidual);
+    if (!r.converged) ++stats_.unconverged;
+    if (!x.allFinite())
       throw FillingError("voxel Darcy: the pressure solve gave a non-finite value at t = " + std::to_string(time_) + " s");
-    for (std::size_t c = 0; c < n; ++c)
-      if (unknown_[c] >= 0) pressure_[c] = p[unknown_[c]];
+    for (int row = 0; row < unknowns; ++row) pressure_[filled_[std::size_t(row)]] = x[row];
     solveSeconds += seconds(ts);
     stats_.solveSeconds += seconds(ts);
   };
@@ -362,21 +558,8 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   // solving with a guess, opening the barred voxels the solution pushes on and barring the open ones it
   // would drain (the complementarity conditions flux >= 0, p_up <= p_entry where barred), until nothing
   // changes; if every front voxel is barred, the easiest one opens (the pressure rises until it does).
-  std::vector<std::size_t> front;
-  if (capillary && unknowns > 0) {
-    for (std::size_t c = 0; c < n; ++c) {
-      if (state_[c] != kEmpty) continue;
-      const auto v = medium_.ijk(c);
-      for (int a = 0; a < 3; ++a)
-        for (int sign : {-1, 1}) {
-          const int coord = v[std::size_t(a)] + sign;
-          if (coord < 0 || coord >= medium_.size[a]) continue;
-          if (state_[std::size_t(std::ptrdiff_t(c) + sign * stride[a])] == kFilled) {
-            if (front.empty() || front.back() != c) front.push_back(c);
-          }
-        }
-    }
-  }
+  static const std::vector<std::size_t> none;
+  const std::vector<std::size_t>& front = capillary && unknowns > 0 ? front_ : none;
   auto upstreamPressure = [&](std::size_t m) {
     double up = -std::numeric_limits<double>::infinity();
     const auto v = medium_.ijk(m);
@@ -391,9 +574,11 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   };
   // Face fluxes of the last solve (velocities, shear rates), signed along +axis; a front link's is its inflow.
   auto faceFluxes = [&]() {
-    std::fill(faceFlux_.begin(), faceFlux_.end(), 0.0f);
-    for (std::size_t c = 0; c < n; ++c) {
-      if (state_[c] != kFilled) continue;
+    for (std::size_t c : fluxWritten_)
+      for (int a = 0; a < 3; ++a) faceFlux_[3 * c + std::size_t(a)] = 0.0f;
+    fluxWritten_ = filled_;
+    fluxWritten_.insert(fluxWritten_.end(), front_.begin(), front_.end());
+    for (std::size_t c : filled_) {
       const auto v = medium_.ijk(c);
       for (int a = 0; a < 3; ++a) {
         if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
@@ -484,7 +669,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   std::vector<std::pair<std::size_t, double>> excess;
   for (const auto& [c, q] : inflow) {
     if (q <= 0) continue;
-    if (arrival_[c] < 0) arrival_[c] = time_;
+    wet(c);
     fill_[c] += q * scale * dt / poreVolume(c);
     if (fill_[c] > 1.0) excess.push_back({c, (fill_[c] - 1.0) * poreVolume(c)});
     if (fill_[c] >= 1.0 - 1e-12) markFilled(c);
