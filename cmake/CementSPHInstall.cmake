@@ -12,7 +12,7 @@ set(CEMENTSPH_EXPORTED_LIBRARIES
   CementSPH_ImagingIO:ImagingIO CementSPH_Registration:Registration CementSPH_Segmentation:Segmentation
   CementSPH_Anatomy:Anatomy CementSPH_Scene:Scene CementSPH_CTScene:CTScene CementSPH_Phantom:Phantom CementSPH_Study:Study
   CementSPH_Planning:Planning CementSPH_Parallel:Parallel
-  CementSPH_DRR:DRR
+  CementSPH_DRR:DRR CementSPH_Pipeline:Pipeline
   # Static libraries carry their private usage requirements into the export ($<LINK_ONLY:...>), so the
   # two interface targets of compile flags go along (they add nothing to a consumer's link).
   cementsph_warnings:warnings cementsph_optimise:optimise)

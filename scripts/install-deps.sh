@@ -25,6 +25,9 @@ PACKAGES=(
   libosmesa6-dev libegl-mesa0 libgl1-mesa-dri
   # the last fallback if neither OSMesa nor EGL gives a context: a private virtual X server
   xvfb xauth
+  # the cementsph Python module (Python/, issue 22): pybind11, Python's headers, numpy for its arrays
+  # (python3-vtk9, for VTK objects in Python, comes with libvtk9-dev)
+  pybind11-dev python3-dev python3-numpy
 )
 
 SUDO=""
