@@ -280,6 +280,8 @@ void Grid::validate() const {
 void AnatomyOptions::validate() const {
   if (!(corticalHu > softTissueMaxHu)) throw std::invalid_argument("cortical_hu must be above soft_tissue_max_hu");
   if (!(airMaxHu < softTissueMaxHu)) throw std::invalid_argument("air_max_hu must be below soft_tissue_max_hu");
+  if (!(wallHu > softTissueMaxHu && wallHu <= corticalHu))
+    throw std::invalid_argument("wall_hu must be above soft_tissue_max_hu and at most cortical_hu");
   if (!(wallCloseMm >= 0 && wallCloseMm <= 10)) throw std::invalid_argument("wall_close_mm must be 0 .. 10 mm");
   if (!(minEnclosure >= 0 && minEnclosure <= 1)) throw std::invalid_argument("min_enclosure must be 0 .. 1");
   if (!(seedSearchMm >= 0 && seedSearchMm <= 100)) throw std::invalid_argument("seed_search_mm must be 0 .. 100 mm");
@@ -398,11 +400,14 @@ Anatomy classifyAnatomyFromCT(const float* hu, const Grid& grid, const std::arra
     cortex[v] = hu[v] > o.corticalHu ? 1 : 0;
     band[v] = hu[v] >= o.softTissueMaxHu && hu[v] <= o.corticalHu ? 1 : 0;
   }
-  // 2. The wall: the cortex thickened by wall_close_mm, rounded up to whole voxels per axis (gaps up to twice
-  //    that are shut, whatever the spacing).
+  // 2. The wall: the shell (HU above wall_hu: a 1 mm end plate averaged over a 2 mm slice shows 250-350 HU, below
+  //    cortical_hu) thickened by wall_close_mm, rounded up to whole voxels per axis (gaps up to twice that are
+  //    shut, whatever the spacing).
+  Mask shell(L.n);
+  for (std::size_t v = 0; v < L.n; ++v) shell[v] = hu[v] > o.wallHu ? 1 : 0;
   std::array<int, 3> r{};
   for (int a = 0; a < 3; ++a) r[std::size_t(a)] = int(std::ceil(o.wallCloseMm / grid.spacingMm[std::size_t(a)] - 1e-9));
-  const Mask wall = dilateBox(L, cortex, r);
+  const Mask wall = dilateBox(L, shell, r);
   Mask passable(L.n);
   for (std::size_t v = 0; v < L.n; ++v) passable[v] = band[v] && !wall[v] ? 1 : 0;
 
@@ -562,7 +567,7 @@ Anatomy classifyAnatomyFromCT(const float* hu, const Grid& grid, const std::arra
           bool closed = false, air = false;
           while (s >= 0 && s < len && std::abs(s - start) < maxRun) {
             const std::size_t v = at(s);
-            if (cortex[v]) {
+            if (shell[v]) { // the neighbour's end plate
               closed = true;
               break;
             }
@@ -688,7 +693,8 @@ Anatomy classifyAnatomyFromCT(const float* hu, const Grid& grid, const std::arra
   finish(out);
   std::ostringstream d;
   d << "CT bone rule (cortex > " << fmt(o.corticalHu, 0) << " HU, bone band " << fmt(o.softTissueMaxHu, 0) << " .. "
-    << fmt(o.corticalHu, 0) << " HU, cortex gaps up to " << fmt(2 * o.wallCloseMm) << " mm closed): ";
+    << fmt(o.corticalHu, 0) << " HU, shell > " << fmt(o.wallHu, 0) << " HU with gaps up to " << fmt(2 * o.wallCloseMm)
+    << " mm closed): ";
   if (out.targetFound)
     d << "the target vertebra " << coreNote << ", " << fmt(out.volumeMl(TissueClass::TargetVertebra)) << " ml, closed over its marrow";
   else

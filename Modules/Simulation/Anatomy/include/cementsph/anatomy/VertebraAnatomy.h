@@ -8,7 +8,8 @@
 //
 // The CT-only bone rule (classifyAnatomyFromCT; each step's reason at its code):
 //  1. Cortex: HU > cortical_hu. The bone band: soft_tissue_max_hu <= HU <= cortical_hu.
-//  2. The cortex is thickened by wall_close_mm (a box of ceil(wall_close_mm / spacing) voxels per axis) into a
+//  2. The shell (HU > wall_hu, 250: a 1 mm end plate averaged over a 2 mm slice shows 250-350 HU, trabecular
+//     bone 80-200) is thickened by wall_close_mm (a box of ceil(wall_close_mm / spacing) voxels per axis) into a
 //     wall: gaps in the shell up to 2 x wall_close_mm wide (the basivertebral foramen, a vein's channel, a thin
 //     or partial-volumed end plate) are closed, so the region grown from the tip cannot run out through them.
 //  3. The target's core: the 6-connected band voxels outside the wall around the tip, with its 3-D holes filled
@@ -23,8 +24,8 @@
 //     to it within the body's axial extent +- 2 mm (pedicles, lamina), and the band voxels touching that cortex
 //     (its partial-volume rim).
 //  5. Disc: along the spine axis (the index axis nearest patient z), above and below the body in each of its
-//     columns, the run of voxels from the body's end plate to the next cortex (the neighbour's end plate), if
-//     that is found within max_disc_height_mm and the run holds no air.
+//     columns, the run of voxels from the body's end plate to the next shell voxel (the neighbour's end plate), if
+//     (HU > wall_hu) is found within max_disc_height_mm and the run holds no air.
 //  6. Canal: in each axial slice, the non-target regions of at least min_canal_area_mm2 enclosed by the target
 //     vertebra (the vertebral foramen: body, pedicles and lamina ring it). Not detected at disc level.
 //  7. Other bone: cortex not in the target, its partial-volume rim, and anything enclosed by bone that is not the
@@ -82,6 +83,7 @@ struct AnatomyOptions {
   double softTissueMaxHu = 40.0; // BoneCalibration::softTissueMaxHu: below it, not bone
   double corticalHu = 350.0;     // BoneCalibration::corticalHu: above it, cortex
   double airMaxHu = -500.0;      // below it, air (fat is -150 .. -50, lung -900)
+  double wallHu = 250.0;         // above it, the shell that bounds the target (partial-volumed cortex included)
   double wallCloseMm = 2.5;      // cortex gaps up to twice this are closed
   double minEnclosure = 0.5;     // per direction, the share of the core's boundary on the wall
   double seedSearchMm = 20.0;    // where to look for the vertebra when the tip is not in one
