@@ -35,6 +35,17 @@ std::vector<std::string> sceneOverrides(const CLI::App& sub, const SceneOverride
   requireFinite("--flow-rate-ml-per-s", {a.flowRateMlPerS});
   requireFinite("--viscosity-pa-s", {a.viscosityPaS});
   requireFinite("--snapshot-interval-s", {a.snapshotIntervalS});
+  // A volume, rate, viscosity or interval given on the command line must be positive: refused here, the line
+  // naming the option the user typed, rather than the scene key it becomes. (Limits that depend on other
+  // keys, such as an injection longer than a day, are the scene's to check: SceneConfig::validate.)
+  auto requirePositiveIfGiven = [&](const char* option, double x) {
+    if (sub.count(option) && !(x > 0))
+      throw std::invalid_argument(std::string(option) + ": " + exactNumber(x) + " is not a positive number");
+  };
+  requirePositiveIfGiven("--volume-ml", a.volumeMl);
+  requirePositiveIfGiven("--flow-rate-ml-per-s", a.flowRateMlPerS);
+  requirePositiveIfGiven("--viscosity-pa-s", a.viscosityPaS);
+  requirePositiveIfGiven("--snapshot-interval-s", a.snapshotIntervalS);
   // Flags given on the command line override the scene file (and --set), in this order.
   std::vector<std::string> overrides = a.set;
   if (!a.tipMm.empty())

@@ -298,6 +298,20 @@ TEST_F(InputFuzz, BadOptionsAndScenesNameTheOptionOrKey) {
        "particle_radius_mm"},
       {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "max_displacement_over_h=1e-9", "--out", out},
        "max_displacement_over_h"},
+      // Issue 21: a non-positive flag names the flag; an injection longer than a day, or more than 10000
+      // snapshots, names the key that makes it so (not particle_radius_mm); NaN in --set names its key.
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--flow-rate-ml-per-s", "0", "--out", out},
+       "--flow-rate-ml-per-s"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--snapshot-interval-s", "-1", "--out", out},
+       "--snapshot-interval-s"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--flow-rate-ml-per-s", "1e-300", "--out", out},
+       "flow_rate_ml_per_s"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--snapshot-interval-s", "1e-300", "--out", out},
+       "snapshot_interval_s"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "sound_speed_m_per_s=nan", "--out", out},
+       "sound_speed_m_per_s"},
+      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "drag_coefficient=1e300", "--out", out},
+       "drag_coefficient"},
   };
   for (const Case& c : cases) {
     const ProgramRun r = runCementsph(c.args);
