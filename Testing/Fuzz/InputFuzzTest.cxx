@@ -286,6 +286,12 @@ TEST_F(InputFuzz, BadOptionsAndScenesNameTheOptionOrKey) {
     std::vector<std::string> args;
     std::string names;
   };
+  // inject on the phantom with the given options added.
+  auto inject = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> a{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--out", out};
+    a.insert(a.end() - 2, extra.begin(), extra.end());
+    return a;
+  };
   const std::vector<Case> cases{
       {{"darcy", "--porosities", "1", "--out", out}, "--porosities"},
       {{"darcy", "--steady-tolerance", "0", "--out", out}, "--steady-tolerance"},
@@ -300,18 +306,12 @@ TEST_F(InputFuzz, BadOptionsAndScenesNameTheOptionOrKey) {
        "max_displacement_over_h"},
       // Issue 21: a non-positive flag names the flag; an injection longer than a day, or more than 10000
       // snapshots, names the key that makes it so (not particle_radius_mm); NaN in --set names its key.
-      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--flow-rate-ml-per-s", "0", "--out", out},
-       "--flow-rate-ml-per-s"},
-      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--snapshot-interval-s", "-1", "--out", out},
-       "--snapshot-interval-s"},
-      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--flow-rate-ml-per-s", "1e-300", "--out", out},
-       "flow_rate_ml_per_s"},
-      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--snapshot-interval-s", "1e-300", "--out", out},
-       "snapshot_interval_s"},
-      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "sound_speed_m_per_s=nan", "--out", out},
-       "sound_speed_m_per_s"},
-      {{"inject", "--ct", ct, "--scene", scene, "--tip-mm", tip, "--set", "drag_coefficient=1e300", "--out", out},
-       "drag_coefficient"},
+      {inject({"--flow-rate-ml-per-s", "0"}), "--flow-rate-ml-per-s"},
+      {inject({"--snapshot-interval-s", "-1"}), "--snapshot-interval-s"},
+      {inject({"--flow-rate-ml-per-s", "1e-300"}), "flow_rate_ml_per_s"},
+      {inject({"--snapshot-interval-s", "1e-300"}), "snapshot_interval_s"},
+      {inject({"--set", "sound_speed_m_per_s=nan"}), "sound_speed_m_per_s"},
+      {inject({"--set", "drag_coefficient=1e300"}), "drag_coefficient"},
   };
   for (const Case& c : cases) {
     const ProgramRun r = runCementsph(c.args);
