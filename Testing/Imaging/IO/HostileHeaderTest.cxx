@@ -144,7 +144,7 @@ TEST(HostileMetaImage, DataFilePatternsThatCrashOrMisreadAreRefused) {
   for (const char* pattern : {"s%02d.raw 1 5 0", "s%02d.raw 1 5 -1", "s%02d.raw 5 1 1", "s%02d.raw 1 5 2",
                               "s%02d.raw 1 9 1", "s%s.raw 1 5 1", "s%02d%d.raw 1 5 1", "s%n%02d.raw 1 5 1",
                               "s%999d.raw 1 5 1", "s%ld.raw 1 5 1", "s%02d.raw", "s%02d.raw 1 x 1",
-                              "s%02d.raw 1 99999999999 1", "s%02d.raw 1 5 1 2"})
+                              "s%02d.raw 1 99999999999 1", "s%02d.raw 1 5 1 2", "s%02d.raw 1 2000000000 1"})
     expectRefused(metaCase(dir, "p.mhd", "", pattern), "ElementDataFile");
   // A pattern naming a file that is not there.
   expectRefused(metaCase(dir, "p.mhd", "", "t%02d.raw 1 5 1"), "t01.raw");
@@ -162,7 +162,7 @@ TEST(HostileMetaImage, DimensionsAndSpacingsOutsideTheirRangeAreRefused) {
   for (const char* ndims : {"NDims = -1", "NDims = 0", "NDims = 4", "NDims = 2", "NDims = abc", "NDims = 3.5",
                             "NDims = 99999999999999999999"})
     expectRefused(metaCase(dir, "n.mhd", ndims, "all.raw"), "NDims");
-  for (const char* dims : {"DimSize = 4 3 0", "DimSize = 4 -3 5", "DimSize = 4 3", "DimSize = 4 3 5 6", "DimSize = a b c"})
+  for (const char* dims : {"DimSize = 2000 2000 2000", "DimSize = 4 3 0", "DimSize = 4 -3 5", "DimSize = 4 3", "DimSize = 4 3 5 6", "DimSize = a b c"})
     expectRefused(metaCase(dir, "d.mhd", dims, "all.raw"), "DimSize");
   for (const char* spacing : {"ElementSpacing = nan 0.5 0.5", "ElementSpacing = 0.5 inf 0.5", "ElementSpacing = 0.5 0.5 0",
                               "ElementSpacing = -0.5 0.5 0.5", "ElementSpacing = 1e300 0.5 0.5", "ElementSpacing = 0.5 0.5"})
@@ -222,7 +222,8 @@ TEST(HostileNrrd, SpacingsAndDirectionsOutsideTheirRangeAreRefused) {
   for (const auto& [from, to, field] :
        {std::tuple{"dimension: 3", "dimension: -1", "dimension"}, std::tuple{"dimension: 3", "dimension: 99", "dimension"},
         std::tuple{"dimension: 3", "dimension: x", "dimension"}, std::tuple{"sizes: 4 3 5", "sizes: 4 3 0", "sizes"},
-        std::tuple{"sizes: 4 3 5", "sizes: 4 3", "sizes"}, std::tuple{"sizes: 4 3 5", "sizes: 4 -3 5", "sizes"}}) {
+        std::tuple{"sizes: 4 3 5", "sizes: 4 3", "sizes"}, std::tuple{"sizes: 4 3 5", "sizes: 4 -3 5", "sizes"},
+        std::tuple{"sizes: 4 3 5", "sizes: 4000 3000 5000", "2^30"}}) {
     std::string h = nrrdHeader(kDirections);
     h.replace(h.find(from), std::strlen(from), to);
     writeFile(dir / "d.nrrd", h + "\n" + data);
@@ -350,6 +351,14 @@ TEST(HostileNifti, NonFiniteOrientationAndSpacingAreRefused) {
   expectRefused(nii.with(40, std::int16_t(9)), "dim[0]");
   expectRefused(nii.with(44, std::int16_t(-4)), "dim[2]");
   expectRefused(nii.with(70, std::int16_t(17)), "datatype");
+  {
+    // 32767^3 voxels: refused from the header, before anything is allocated or read.
+    std::string b = nii.bytes();
+    const std::int16_t big[3] = {32767, 32767, 32767};
+    std::memcpy(&b[42], big, sizeof big);
+    writeFile(dir / "huge.nii", b);
+    expectRefused(dir / "huge.nii", "2^30");
+  }
 }
 
 TEST(HostileNifti, VoxOffsetOutsideTheFileIsRefused) {

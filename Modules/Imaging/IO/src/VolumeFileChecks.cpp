@@ -215,6 +215,12 @@ std::vector<double> numbersOf(const std::string& path, const std::string& key, c
   return out;
 }
 
+// A header's voxel count within what is read (before a reader allocates, or data is decompressed, for it).
+void requireVoxelCount(const std::string& path, const std::string& key, double voxels) {
+  if (voxels > kMaxVoxels)
+    refuse(path, key + " claims " + number(voxels) + " voxels, more than this program reads (2^30)");
+}
+
 // A spacing from the header itself: readers replace a NaN, infinite or zero spacing by 1 mm without a word,
 // so the value in the file is checked, not what the reader makes of it.
 void requireSpacing(const std::string& path, const std::string& what, double mm) {
@@ -301,6 +307,10 @@ std::vector<std::string> patternFiles(const std::string& path, const std::string
     refuse(path, what + ": step " + std::to_string(*step) + " does not lead from " + std::to_string(*first) + " to " +
                      std::to_string(*last));
   const long long files = span / *step + 1;
+  // A CT has hundreds of slices; a million files is far past any and keeps the name list (and the time to
+  // look for each file) bounded for a header that claims billions.
+  if (files > 1000000)
+    refuse(path, what + " names " + std::to_string(files) + " data files, more than the 1000000 this program reads");
   if (files != count)
     refuse(path, what + " names " + std::to_string(files) + " data files, but the image needs " +
                      std::to_string(count) + " (one per slice); fix first, last or step");
@@ -422,6 +432,7 @@ void checkMetaHeader(const std::string& path) {
       if (w.size() != 3 || !x || *x < 1) // 0 divides by zero in MetaIO
         refuse(path, "DimSize = " + shownValue(*dimSize) + " is not 3 positive whole numbers (damaged header?)");
     }
+    requireVoxelCount(path, "DimSize", double(*toInteger(w[0])) * double(*toInteger(w[1])) * double(*toInteger(w[2])));
   }
   // Keys as MetaIO spells them; the header map holds them in lower case.
   auto named = [&](const std::string& key) -> std::optional<std::pair<std::string, std::string>> {
@@ -611,10 +622,15 @@ void checkNrrdHeader(const std::string& path) {
     if (!sizesField) refuse(path, "NRRD header has no sizes field");
     const auto w = words(*sizesField);
     bool good = static_cast<long long>(w.size()) == *axes;
-    for (const std::string& t : w) good = good && toInteger(t).value_or(0) >= 1;
+    double voxels = 1;
+    for (const std::string& t : w) {
+      good = good && toInteger(t).value_or(0) >= 1;
+      voxels *= double(toInteger(t).value_or(0));
+    }
     if (!good)
       refuse(path, "sizes: " + shownValue(*sizesField) + " is not " + std::to_string(*axes) +
                        " positive whole numbers (one per axis of dimension)");
+    requireVoxelCount(path, "sizes", voxels);
   }
   // No spacing at all: the reader would assume 1 mm, a guess that silently scales every distance.
   if (!field({"spacings"}) && !field({"space directions"}))
@@ -785,8 +801,7 @@ void checkNifti(const std::string& path) {
                      number(minOffset) + "; damaged header?)");
   double voxelCount = 1;
   for (int i = 1; i <= dims[0]; ++i) voxelCount *= double(dims[i]);
-  if (voxelCount > 1099511627776.0) // 2^40: far past what is read; keeps the byte count below from overflowing
-    refuse(path, "NIfTI dim claims " + number(voxelCount) + " voxels (damaged header?)");
+  requireVoxelCount(path, "NIfTI dim", voxelCount);
   const std::uintmax_t voxels = std::uintmax_t(voxelCount);
   const std::uintmax_t needed = std::uintmax_t(voxOffset) + voxels * voxelBytes;
   if (pair) {

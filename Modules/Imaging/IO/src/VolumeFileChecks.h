@@ -15,6 +15,8 @@ enum class VolumeFormat { Nrrd, MetaImage, Nifti };
 
 // Sane spacings for a CT read from disk: a micrometre to 10 cm. Outside them a header is damaged or not a CT.
 constexpr double kMinSpacingMm = 1e-3, kMaxSpacingMm = 100.0;
+// At most 2^30 voxels (4 GiB of float): checked from the header too, before any data is decompressed.
+constexpr double kMaxVoxels = 1073741824.0;
 
 // Before CanReadFile's reader sees more than the magic and before ReadImageInformation: a header that would
 // crash, hang or mislead the reader.

@@ -96,8 +96,8 @@ itk::ImageIOBase::Pointer imageIOForExtension(const std::string& path) {
 // 2^30 voxels (4 GiB of float). A header outside them is damaged or not a CT; refusing it here keeps a 1e300
 // spacing or a 10^12-voxel claim from reaching the registration, the particle model or the allocator.
 using detail::kMaxSpacingMm;
+using detail::kMaxVoxels;
 using detail::kMinSpacingMm;
-constexpr double kMaxVoxels = 1073741824.0;
 
 std::string sizeText(const std::array<std::size_t, 3>& size) {
   return std::to_string(size[0]) + "x" + std::to_string(size[1]) + "x" + std::to_string(size[2]);
