@@ -55,6 +55,21 @@ struct Truth {
     lower[1] = c[2] - kH;
   }
   double radial(const P& p) const { return std::hypot((p[0] - c[0]) / kA, (p[1] - c[1]) / kB); }
+  // The shapes (a point inside; count() asks it of all 8 corners of a voxel's box).
+  bool inBody(const P& p) const { return radial(p) <= 1 && std::abs(p[2] - c[2]) <= kH; }
+  bool inFat(const P& p) const { return std::hypot(p[0] - fat[0], p[1] - fat[1], p[2] - fat[2]) <= kFatR; }
+  bool inDisc(const P& p) const {
+    return radial(p) <= 1 && ((p[2] >= upper[0] && p[2] <= upper[1]) || (p[2] >= lower[0] && p[2] <= lower[1]));
+  }
+  bool inCanal(const P& p) const {
+    return std::hypot(p[0] - canal[0], p[1] - canal[1]) <= kCanalR && std::abs(p[2] - c[2]) <= 0.8 * kH && radial(p) > 1;
+  }
+  // The openings of the posterior wall, 1 mm around each: the 3 mm foramen and the vein's channel.
+  bool inForamen(const P& p) const { return p[1] > c[1] && std::hypot(p[0] - c[0], p[2] - c[2]) <= 1.5 + 1; }
+  bool inVeinChannel(const P& p) const { return veinDistance(p) <= kVeinR + 1 && radial(p) > 0.8; }
+  // The vein outside the body, 2 mm clear of its wall (the wall's partial-volume rim is the vertebra's), to 0.25 mm
+  // of partial volume.
+  bool inVeinOutside(const P& p) const { return veinDistance(p) <= kVeinR + 0.25 && radial(p) >= 1 + 2.0 / kB; }
   double veinDistance(const P& p) const {
     P u, q;
     double uu = 0, t = 0;
@@ -72,13 +87,13 @@ struct Truth {
 };
 
 struct Scene {
-  phantom::VertebraOptions options = variantOptions();
+  phantom::VertebraOptions options;
   phantom::VertebraResult phantom;
   anatomy::Grid grid;
   std::vector<float> hu;
   std::unique_ptr<Truth> truth;
   anatomy::AnatomyOptions ao; // soft_tissue_max_hu 40, cortical_hu 350: BoneCalibration's defaults
-  Scene() {
+  explicit Scene(const phantom::VertebraOptions& o = variantOptions()) : options(o) {
     phantom = phantom::makeVertebra(options);
     truth = std::make_unique<Truth>(options);
     const auto size = phantom.ct->GetLargestPossibleRegion().GetSize();
@@ -126,14 +141,17 @@ struct Count {
   std::size_t inside = 0, right = 0;
   double share() const { return inside ? double(right) / double(inside) : 0.0; }
 };
-Count count(const anatomy::Anatomy& a, const std::function<bool(const P&)>& in, TissueClass expected) {
+Count count(const Scene& s, const anatomy::Anatomy& a, const std::function<bool(const P&)>& in, TissueClass expected) {
   Count c;
-  scene().forEach([&](std::size_t n, const P&, const std::array<P, 8>& cs) {
+  s.forEach([&](std::size_t n, const P&, const std::array<P, 8>& cs) {
     if (!allCorners(cs, in)) return;
     ++c.inside;
     if (a.at(n) == expected) ++c.right;
   });
   return c;
+}
+Count count(const anatomy::Anatomy& a, const std::function<bool(const P&)>& in, TissueClass expected) {
+  return count(scene(), a, in, expected);
 }
 } // namespace
 
@@ -193,12 +211,7 @@ TEST(VertebraAnatomy, MarrowFatInsideTheBodyIsTheTargetNotALeak) {
 TEST(VertebraAnatomy, TheWholeBodyIsTheTarget) {
   const auto& s = scene();
   const auto& t = *s.truth;
-  const Count c = count(ctAnatomy(),
-                        [&](const P& p) {
-                          const bool foramen = p[1] > t.c[1] && std::hypot(p[0] - t.c[0], p[2] - t.c[2]) <= 1.5 + 1;
-                          const bool channel = t.veinDistance(p) <= kVeinR + 1 && t.radial(p) > 0.8;
-                          return t.radial(p) <= 1 && std::abs(p[2] - t.c[2]) <= kH && !foramen && !channel;
-                        },
+  const Count c = count(ctAnatomy(), [&](const P& p) { return t.inBody(p) && !t.inForamen(p) && !t.inVeinChannel(p); },
                         TissueClass::TargetVertebra);
   EXPECT_GT(c.inside, 12000u); // pi 20 15 25 / 1.5 mm^3 = 15700 voxels less the boundary shell (~20 %)
   EXPECT_EQ(c.right, c.inside);
@@ -208,44 +221,17 @@ TEST(VertebraAnatomy, TheWholeBodyIsTheTarget) {
 // target, exactly, but for the foramen; the canal is canal (>= 95 %); nothing is disc (no end plate has a
 // neighbour within 15 mm); the bundled plan's tip is accepted.
 TEST(VertebraAnatomy, TheDefaultPhantomUnderTheBoneRule) {
-  const phantom::VertebraOptions o;
-  const auto ph = phantom::makeVertebra(o);
-  const Truth t(o);
-  anatomy::Grid g;
-  const auto size = ph.ct->GetLargestPossibleRegion().GetSize();
-  for (int a = 0; a < 3; ++a) {
-    g.size[a] = int(size[a]);
-    g.spacingMm[a] = o.spacingMm[a];
-  }
-  const std::vector<float> hu(ph.ct->GetBufferPointer(), ph.ct->GetBufferPointer() + g.count());
-  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), g, ph.suggestedTipMm, {});
-  EXPECT_EQ(anatomy::requireTipInVertebra(a, hu.data(), ph.suggestedTipMm, false), TissueClass::TargetVertebra);
-  std::size_t body = 0, bodyRight = 0, canal = 0, canalRight = 0, disc = 0;
-  std::size_t n = 0;
-  for (int k = 0; k < g.size[2]; ++k)
-    for (int j = 0; j < g.size[1]; ++j)
-      for (int i = 0; i < g.size[0]; ++i, ++n) {
-        const P p = g.centreMm(i, j, k);
-        bool inBody = true, inCanal = true;
-        for (int q = 0; q < 8; ++q) {
-          P c;
-          for (int e = 0; e < 3; ++e) c[e] = p[e] + ((q >> e) & 1 ? 0.5 : -0.5) * g.spacingMm[e];
-          const bool foramen = c[1] > t.c[1] && std::hypot(c[0] - t.c[0], c[2] - t.c[2]) <= 1.5 + 1;
-          inBody = inBody && t.radial(c) <= 1 && std::abs(c[2] - t.c[2]) <= kH && !foramen;
-          inCanal = inCanal && std::hypot(c[0] - t.canal[0], c[1] - t.canal[1]) <= kCanalR &&
-                    std::abs(c[2] - t.c[2]) <= 0.8 * kH && t.radial(c) > 1;
-        }
-        body += inBody;
-        bodyRight += inBody && a.at(n) == TissueClass::TargetVertebra;
-        canal += inCanal;
-        canalRight += inCanal && a.at(n) == TissueClass::Canal;
-        disc += a.at(n) == TissueClass::Disc;
-      }
-  EXPECT_GT(body, 12000u);
-  EXPECT_EQ(bodyRight, body);
-  EXPECT_GT(canal, 1500u);
-  EXPECT_GE(double(canalRight), 0.95 * double(canal)) << canalRight << " of " << canal;
-  EXPECT_EQ(disc, 0u);
+  const Scene sc{phantom::VertebraOptions{}};
+  const auto& t = *sc.truth;
+  const auto a = anatomy::classifyAnatomyFromCT(sc.hu.data(), sc.grid, sc.phantom.suggestedTipMm, sc.ao);
+  EXPECT_EQ(anatomy::requireTipInVertebra(a, sc.hu.data(), sc.phantom.suggestedTipMm, false), TissueClass::TargetVertebra);
+  const Count body = count(sc, a, [&](const P& c) { return t.inBody(c) && !t.inForamen(c); }, TissueClass::TargetVertebra);
+  EXPECT_GT(body.inside, 12000u);
+  EXPECT_EQ(body.right, body.inside);
+  const Count canal = count(sc, a, [&](const P& c) { return t.inCanal(c); }, TissueClass::Canal);
+  EXPECT_GT(canal.inside, 1500u);
+  EXPECT_GE(canal.share(), 0.95) << canal.right << " of " << canal.inside;
+  EXPECT_EQ(a.volumeMl(TissueClass::Disc), 0.0);
 }
 
 // A permutation and a flip of the grid's axes (the CT stored z-fastest and right-to-left, its direction saying
@@ -311,12 +297,7 @@ TEST(VertebraAnatomy, TheDiscSpacesAreDisc) {
 // wholly inside it and wholly behind the body's ellipse.
 TEST(VertebraAnatomy, TheCanalIsCanal) {
   const auto& t = *scene().truth;
-  const Count c = count(ctAnatomy(),
-                        [&](const P& p) {
-                          return std::hypot(p[0] - t.canal[0], p[1] - t.canal[1]) <= kCanalR &&
-                                 std::abs(p[2] - t.c[2]) <= 0.8 * kH && t.radial(p) > 1;
-                        },
-                        TissueClass::Canal);
+  const Count c = count(ctAnatomy(), [&](const P& p) { return t.inCanal(p); }, TissueClass::Canal);
   EXPECT_GT(c.inside, 1500u); // pi 8^2 x 20 / 1.5 mm^3 = 2680 voxels less the shell
   EXPECT_GE(c.share(), 0.95) << c.right << " of " << c.inside;
 }
@@ -326,9 +307,7 @@ TEST(VertebraAnatomy, TheCanalIsCanal) {
 // of 60 HU falls below the 40 HU band with the 10 HU noise 2.3 % of the time; the rule fills such holes.
 TEST(VertebraAnatomy, TheVeinOutsideTheBodyIsVessel) {
   const auto& t = *scene().truth;
-  const Count c = count(ctAnatomy(),
-                        [&](const P& p) { return t.veinDistance(p) <= kVeinR + 0.25 && t.radial(p) >= 1 + 2.0 / kB; },
-                        TissueClass::Vessel);
+  const Count c = count(ctAnatomy(), [&](const P& p) { return t.inVeinOutside(p); }, TissueClass::Vessel);
   EXPECT_GT(c.inside, 10u);
   EXPECT_GE(c.share(), 0.95) << c.right << " of " << c.inside;
   std::printf("vein outside the body: %zu of %zu voxels vessel\n", c.right, c.inside);
@@ -375,56 +354,28 @@ TEST(VertebraAnatomy, AtClinicalSliceThicknessAndNoise) {
   o.spacingMm = {0.98, 0.98, 2.0};
   o.noiseHu = 20;
   o.fieldMm = {64, 70, 60};
-  const auto ph = phantom::makeVertebra(o);
-  const Truth t(o);
-  anatomy::Grid g;
-  const auto size = ph.ct->GetLargestPossibleRegion().GetSize();
-  for (int a = 0; a < 3; ++a) {
-    g.size[a] = int(size[a]);
-    g.spacingMm[a] = o.spacingMm[a];
-  }
-  const std::vector<float> hu(ph.ct->GetBufferPointer(), ph.ct->GetBufferPointer() + g.count());
-  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), g, t.c, {});
-  enum { kBody, kFat, kDisc, kCanal, kVein };
-  const TissueClass expected[5] = {TissueClass::TargetVertebra, TissueClass::TargetVertebra, TissueClass::Disc,
-                                   TissueClass::Canal, TissueClass::Vessel};
-  std::size_t inside[5] = {0, 0, 0, 0, 0}, right[5] = {0, 0, 0, 0, 0}, n = 0;
-  for (int k = 0; k < g.size[2]; ++k)
-    for (int j = 0; j < g.size[1]; ++j)
-      for (int i = 0; i < g.size[0]; ++i, ++n) {
-        const P p = g.centreMm(i, j, k);
-        bool in[5] = {true, true, true, true, true};
-        for (int q = 0; q < 8; ++q) {
-          P c;
-          for (int e = 0; e < 3; ++e) c[e] = p[e] + ((q >> e) & 1 ? 0.5 : -0.5) * g.spacingMm[e];
-          const bool opening = (c[1] > t.c[1] && std::hypot(c[0] - t.c[0], c[2] - t.c[2]) <= 1.5 + 1) ||
-                               (t.veinDistance(c) <= kVeinR + 1 && t.radial(c) > 0.8);
-          in[kBody] = in[kBody] && t.radial(c) <= 1 && std::abs(c[2] - t.c[2]) <= kH && !opening;
-          in[kFat] = in[kFat] && std::hypot(c[0] - t.fat[0], c[1] - t.fat[1], c[2] - t.fat[2]) <= kFatR;
-          in[kDisc] = in[kDisc] && t.radial(c) <= 1 &&
-                      ((c[2] >= t.upper[0] && c[2] <= t.upper[1]) || (c[2] >= t.lower[0] && c[2] <= t.lower[1]));
-          in[kCanal] = in[kCanal] && std::hypot(c[0] - t.canal[0], c[1] - t.canal[1]) <= kCanalR &&
-                       std::abs(c[2] - t.c[2]) <= 0.8 * kH && t.radial(c) > 1;
-          in[kVein] = in[kVein] && t.veinDistance(c) <= kVeinR + 0.25 && t.radial(c) >= 1 + 2.0 / kB;
-        }
-        for (int r = 0; r < 5; ++r) {
-          inside[r] += in[r];
-          right[r] += in[r] && a.at(n) == expected[r];
-        }
-      }
+  const Scene sc(o);
+  const auto& t = *sc.truth;
+  const auto a = anatomy::classifyAnatomyFromCT(sc.hu.data(), sc.grid, t.c, sc.ao);
+  const Count body = count(sc, a, [&](const P& c) { return t.inBody(c) && !t.inForamen(c) && !t.inVeinChannel(c); },
+                           TissueClass::TargetVertebra);
+  const Count fat = count(sc, a, [&](const P& c) { return t.inFat(c); }, TissueClass::TargetVertebra);
+  const Count disc = count(sc, a, [&](const P& c) { return t.inDisc(c); }, TissueClass::Disc);
+  const Count canal = count(sc, a, [&](const P& c) { return t.inCanal(c); }, TissueClass::Canal);
+  const Count vein = count(sc, a, [&](const P& c) { return t.inVeinOutside(c); }, TissueClass::Vessel);
   std::printf("2 mm slices, 20 HU noise: body %zu/%zu, fat %zu/%zu, discs %zu/%zu, canal %zu/%zu, vein %zu/%zu\n",
-              right[kBody], inside[kBody], right[kFat], inside[kFat], right[kDisc], inside[kDisc], right[kCanal],
-              inside[kCanal], right[kVein], inside[kVein]);
-  EXPECT_GT(inside[kBody], 8000u) << a.description; // pi 20 15 25 / 1.92 mm^3 = 12300 less the shell
-  EXPECT_EQ(right[kBody], inside[kBody]);
-  EXPECT_GT(inside[kFat], 80u);
-  EXPECT_EQ(right[kFat], inside[kFat]);
-  EXPECT_GT(inside[kDisc], 5000u);
-  EXPECT_GE(double(right[kDisc]), 0.95 * double(inside[kDisc])) << right[kDisc] << " of " << inside[kDisc];
-  EXPECT_GT(inside[kCanal], 1000u);
-  EXPECT_GE(double(right[kCanal]), 0.95 * double(inside[kCanal])) << right[kCanal] << " of " << inside[kCanal];
-  EXPECT_GT(inside[kVein], 10u);
-  EXPECT_GE(double(right[kVein]), 0.90 * double(inside[kVein])) << right[kVein] << " of " << inside[kVein];
+              body.right, body.inside, fat.right, fat.inside, disc.right, disc.inside, canal.right, canal.inside,
+              vein.right, vein.inside);
+  EXPECT_GT(body.inside, 8000u) << a.description; // pi 20 15 25 / 1.92 mm^3 = 12300 less the shell
+  EXPECT_EQ(body.right, body.inside);
+  EXPECT_GT(fat.inside, 80u);
+  EXPECT_EQ(fat.right, fat.inside);
+  EXPECT_GT(disc.inside, 5000u);
+  EXPECT_GE(disc.share(), 0.95) << disc.right << " of " << disc.inside;
+  EXPECT_GT(canal.inside, 1000u);
+  EXPECT_GE(canal.share(), 0.95) << canal.right << " of " << canal.inside;
+  EXPECT_GT(vein.inside, 10u);
+  EXPECT_GE(vein.share(), 0.90) << vein.right << " of " << vein.inside;
 }
 
 // (e) A tip outside the target's bone is refused with one line naming the tissue; the body's centre and a point
