@@ -84,7 +84,7 @@ struct AnatomyOptions {
   double corticalHu = 350.0;     // BoneCalibration::corticalHu: above it, cortex
   double airMaxHu = -500.0;      // below it, air (fat is -150 .. -50, lung -900)
   double wallHu = 250.0;         // above it, the shell that bounds the target (partial-volumed cortex included)
-  double wallCloseMm = 2.5;      // cortex gaps up to twice this are closed
+  double wallCloseMm = 2.5;      // gaps of the shell up to twice this are closed
   double minEnclosure = 0.5;     // per direction, the share of the core's boundary on the wall
   double seedSearchMm = 20.0;    // where to look for the vertebra when the tip is not in one
   double minBodyMl = 1.0;        // a vertebral core is at least this big (a lumbar body is 20-40 ml)
@@ -105,9 +105,11 @@ struct LabelTable {
   std::vector<int> vertebrae;
   int targetVertebra = -1; // -1: the one at (or nearest) the tip
   std::map<int, TissueClass> classes; // the other labels
-  // The default: TotalSegmentator's "total" task (v2 numbering): vertebrae 26 (S1) .. 50 (C1), sacrum 25
-  // as bone, aorta 52, inferior vena cava 63, portal/splenic vein 64, iliac arteries 65, 66 and veins 67, 68
-  // as vessel, spinal cord 79 as canal; it has no discs. Pass a table (JSON) for any other segmentation.
+  // The default: TotalSegmentator's "total" task, v2 numbering (map_to_binary.py, class_map["total"]):
+  // vertebrae 26 (S1) .. 50 (C1); bone: sacrum 25, humeri, scapulae, claviculae, femora, hips 69-78, ribs
+  // 92-115, sternum 116; vessel: aorta 52, pulmonary vein 53, the great vessels 54-60, venae cavae 62-63,
+  // portal/splenic vein 64, iliac arteries and veins 65-68; canal: spinal cord 79. It has no discs (its
+  // "vertebrae_body" task does): pass a table (JSON) for that or any other segmentation.
   static LabelTable totalSegmentator();
   static LabelTable fromJson(const nlohmann::json& j); // std::invalid_argument naming the key
   nlohmann::json toJson() const;
