@@ -104,10 +104,10 @@ private:
   template <int L, int U> void preconditionPadded(const double* r, double* z, int n) const;
   template <int L, int U>
   Result run(const PressureSystem& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int maxIterations);
-  Eigen::VectorXd pivot_, inversePivot_, upperSum_, r_, z_, p_, q_;
+  Eigen::VectorXd pivot_, inversePivot_, previousScaled_, nextScaled_, upperSum_, r_, z_, p_, q_;
   int lowerWidth_ = 0, upperWidth_ = 0;
   std::vector<int> lowerColumn_, upperColumn_;
-  std::vector<double> lowerValue_, upperValue_, diagonalValue_;
+  std::vector<double> lowerValue_, upperValue_, diagonalValue_, previous_, next_; // a_i,i-1 and a_i,i+1 (or 0)
 };
 
 struct FillingSettings {
