@@ -146,8 +146,8 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
       o.outDir = (out / "best").string();
       const scene::InjectionRunResult run = scene::runInjection(image, s, o);
       try {
-        const auto labels = imaging::readVolume((out / "best" / "cement_labels.nrrd").string());
-        auto target = imaging::toVtk(labels.GetPointer());
+        if (!run.cementLabels) throw std::runtime_error("the injection made no cement label map");
+        auto target = imaging::toVtk(run.cementLabels.GetPointer()); // the region's grid, as run.simulatedCt
         // The target's voxels without cement as label 3 (yellow).
         int dims[3];
         target->GetDimensions(dims);

@@ -506,20 +506,28 @@ TEST(ObliqueCT, TiltedSeriesPastesBackOntoItsOwnGrid) {
   EXPECT_NEAR(pastedMl, injected, 0.05 * injected);
 }
 
-// `cementsph inject` on a tilted NRRD, pictures on: exit 0, no crash; its simulated_ct.nrrd is the region of
-// interest of the axis-aligned (resampled) grid, identity direction.
+// `cementsph inject` on a tilted NRRD, pictures on: exit 0, no crash; its simulated_ct.nrrd lies on the input's
+// own grid (size, origin, spacing and the tilted direction), so it subtracts from the input voxel by voxel.
 TEST(ObliqueCT, InjectCommandOnATiltedNrrd) {
   fs::path dir;
-  const auto r = injectCommand("oblique-inject", tiltedCt(axialCt(), 20.0),
-                               R"("volume_ml": 0.1, "cannula_length_mm": 5, "roi_size_mm": 12)", dir);
+  const auto input = tiltedCt(axialCt(), 20.0);
+  const auto r = injectCommand("oblique-inject", input, R"("volume_ml": 0.1, "cannula_length_mm": 5, "roi_size_mm": 12)",
+                               dir);
   ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
   EXPECT_TRUE(fs::exists(dir / "out" / "tip_pressure.png")) << "pictures on";
   const auto sim = cementsph::imaging::readVolume((dir / "out" / "simulated_ct.nrrd").string());
-  EXPECT_TRUE(cementsph::scene::isAxisAligned(sim));
-  const auto size = sim->GetLargestPossibleRegion().GetSize();
-  std::cout << "inject on a 20 deg tilted NRRD: simulated_ct.nrrd " << size[0] << "x" << size[1] << "x" << size[2]
-            << " voxels of " << sim->GetSpacing()[0] << " mm from " << sim->GetOrigin() << ", direction identity\n";
-  for (unsigned a = 0; a < 3; ++a) EXPECT_DOUBLE_EQ(sim->GetSpacing()[a], kSpacing); // the aligned grid's
+  EXPECT_EQ(sim->GetLargestPossibleRegion().GetSize(), input->GetLargestPossibleRegion().GetSize());
+  for (unsigned a = 0; a < 3; ++a) {
+    EXPECT_NEAR(sim->GetSpacing()[a], input->GetSpacing()[a], 1e-9);
+    EXPECT_NEAR(sim->GetOrigin()[a], input->GetOrigin()[a], 1e-6);
+    for (unsigned b = 0; b < 3; ++b) EXPECT_NEAR(sim->GetDirection()[a][b], input->GetDirection()[a][b], 1e-9);
+  }
+  EXPECT_FALSE(cementsph::scene::isAxisAligned(sim));
+  // The cement's change, summed over the input grid, is the injected volume (k = 3000 HU per relative density).
+  double change = 0;
+  forEachVoxel(input, [&](const ImageType::IndexType& i) { change += sim->GetPixel(i) - input->GetPixel(i); });
+  const double pastedMl = change / kHuPerRelativeDensity * std::pow(kSpacing, 3) * 1e-3;
+  EXPECT_NEAR(pastedMl, 0.1, 0.005) << "ml of cement on the input grid";
 }
 
 // The same with bone as a continuum (a box of 150-250 HU bone in 1 mm of cortex, fat outside), so that inject

@@ -4,7 +4,9 @@
 #include "InjectionOutputs.h"
 
 #include "cementsph/provenance/Provenance.h"
+#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/AxisAlignedCT.h"
+#include "cementsph/scene/InputGridPaste.h"
 #include "cementsph/scene/ModelSelection.h"
 #include "cementsph/scene/PorousSolid.h"
 #include "cementsph/scene/SimulatedCT.h"
@@ -12,7 +14,10 @@
 #include "cementsph/sph/Presets.h"
 #include "cementsph/sph/Simulation.h"
 
+#include <itkImageRegionIteratorWithIndex.h>
+
 #include <algorithm>
+#include <filesystem>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -83,6 +88,61 @@ void summarisePressures(const std::vector<TipRecord>& series, InjectionSummary& 
   s.cannulaPressureDropPa = series.back().cannulaPa;
   s.injectionPressurePa = finalTip + series.back().cannulaPa;
   s.maxInjectionPressurePa = maxInjection;
+}
+
+// A label map on `grid`'s geometry from per-voxel labels in its buffer order.
+imaging::MaskType::Pointer labelMapOn(const imaging::ImageType* grid, const std::vector<std::uint8_t>& labels) {
+  auto map = imaging::MaskType::New();
+  map->CopyInformation(grid);
+  map->SetRegions(grid->GetLargestPossibleRegion());
+  map->Allocate();
+  std::copy(labels.begin(), labels.end(), map->GetBufferPointer());
+  return map;
+}
+
+// The label map on the input CT's grid: each input voxel whose centre lies in the region's box takes the label
+// of the region voxel nearest that centre (labels are not interpolated); 0 elsewhere. Every index is checked.
+imaging::MaskType::Pointer labelsOnInputGrid(const imaging::ImageType* input, const imaging::MaskType* region) {
+  auto map = imaging::MaskType::New();
+  map->CopyInformation(input);
+  map->SetRegions(input->GetLargestPossibleRegion());
+  map->Allocate();
+  map->FillBuffer(0);
+  const auto inRegion = input->GetLargestPossibleRegion();
+  const auto roi = region->GetLargestPossibleRegion();
+  // Only the input voxels near the region's box: its corners' input indices bound them.
+  itk::ImageRegionIteratorWithIndex<imaging::MaskType> it(map, inRegion);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (int corner = 0; corner < 8; ++corner) {
+    itk::ContinuousIndex<double, 3> ci;
+    for (unsigned a = 0; a < 3; ++a)
+      ci[a] = double(roi.GetIndex()[a]) - 0.5 + ((corner >> a) & 1 ? double(roi.GetSize()[a]) : 0.0);
+    imaging::MaskType::PointType p;
+    region->TransformContinuousIndexToPhysicalPoint(ci, p);
+    itk::ContinuousIndex<double, 3> ii;
+    input->TransformPhysicalPointToContinuousIndex(p, ii);
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], ii[unsigned(a)]);
+      hi[a] = std::max(hi[a], ii[unsigned(a)]);
+    }
+  }
+  imaging::MaskType::IndexType start;
+  imaging::MaskType::SizeType size;
+  for (unsigned a = 0; a < 3; ++a) {
+    const long first = std::max<long>(inRegion.GetIndex()[a], long(std::floor(lo[int(a)])));
+    const long last = std::min<long>(inRegion.GetIndex()[a] + long(inRegion.GetSize()[a]) - 1, long(std::ceil(hi[int(a)])));
+    if (last < first) return map; // the region lies outside the input
+    start[a] = first;
+    size[a] = itk::SizeValueType(last - first + 1);
+  }
+  itk::ImageRegionIteratorWithIndex<imaging::MaskType> near(map, imaging::MaskType::RegionType(start, size));
+  for (; !near.IsAtEnd(); ++near) {
+    imaging::MaskType::PointType p;
+    map->TransformIndexToPhysicalPoint(near.GetIndex(), p);
+    imaging::MaskType::IndexType r;
+    if (region->TransformPhysicalPointToIndex(p, r)) near.Set(region->GetPixel(r)); // nearest, inside only
+  }
+  return map;
 }
 
 // The path of the first number in j that is NaN or infinite ("" if none).
@@ -206,6 +266,18 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());
   result.simulatedCt = simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0);
   result.regionCt = simulatedCtOnRoi(ct, solid, {}, hu, rho0);
+  if (const std::vector<std::uint8_t> labels = model->cementLabels(); !labels.empty())
+    result.cementLabels = labelMapOn(result.simulatedCt, labels);
+  // The files on the input's own grid unless a crop was asked for (only when files are written: a copy of the
+  // whole scan is what a study or a plan does not need).
+  if (writer.writing()) {
+    result.simulatedCtFile = result.simulatedCt;
+    result.cementLabelsFile = result.cementLabels;
+    if (!o.cropToRegion) {
+      result.simulatedCtFile = pasteOntoInputGrid(input, result.simulatedCt, result.regionCt);
+      if (result.cementLabels) result.cementLabelsFile = labelsOnInputGrid(input, result.cementLabels);
+    }
+  }
   result.metrics = s.toJson();
   result.metrics["provenance"] = provenance::toJson();
   for (const auto& [key, value] : result.engineFigures.items()) {
@@ -217,14 +289,16 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   if (const std::string bad = firstNonFinite(result.metrics); !bad.empty())
     throw sph::SimulationError("inject: the run's figure " + bad + " is not a finite number (the run went wrong; "
                                "try a smaller flow rate or particle radius, or report the scene)");
-  if (writer.writing()) model->writeFiles(o.outDir, result.simulatedCt);
+  result.metrics["simulated_ct_grid"] = o.cropToRegion ? "region" : "input";
+  if (result.cementLabelsFile)
+    imaging::writeMask(result.cementLabelsFile, (std::filesystem::path(o.outDir) / "cement_labels.nrrd").string());
   // For 3D Slicer (SlicerFiles.h): the tip and trajectory, the leak sites, the label map's colours.
   const std::vector<std::pair<std::string, std::string>> slicerFiles{
       {"injection.mrk.json", injectionMarkups(*scene.tipMm, scene.direction, scene.cannulaLengthMm).dump(2) + "\n"},
       {"leak_sites.mrk.json", leakSiteMarkups(s.leakageSites).dump(2) + "\n"},
       {"cement_labels.ctbl", cementLabelColourTable()}};
-  writer.finish(model->time(), result.particles, result.simulatedCt, result.tipSeries, model->pressureBaselinePa(),
-                result.metrics, slicerFiles);
+  writer.finish(model->time(), result.particles, result.simulatedCt, result.simulatedCtFile, result.tipSeries,
+                model->pressureBaselinePa(), result.metrics, slicerFiles);
   return result;
 }
 

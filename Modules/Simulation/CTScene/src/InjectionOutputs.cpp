@@ -86,14 +86,15 @@ void InjectionWriter::snapshot(double time, vtkPolyData* particles, const imagin
 }
 
 void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,
-                             const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, json& metrics,
+                             const imaging::ImageType* simulatedCtFile, const std::vector<TipRecord>& tipSeries,
+                             std::optional<double> baselinePa, json& metrics,
                              const std::vector<std::pair<std::string, std::string>>& textFiles) {
   if (!writing()) return;
   snapshot(time, particles, simulatedCt);
   const fs::path out(outDir_);
   imaging::writeTextAtomically((out / "particles.pvd").string(), particleCollection(snapshots_));
   imaging::writeTextAtomically((out / "tip_pressure.csv").string(), tipPressureCsv(tipSeries, baselinePa));
-  imaging::writeVolume(simulatedCt, (out / "simulated_ct.nrrd").string());
+  imaging::writeVolume(simulatedCtFile, (out / "simulated_ct.nrrd").string());
   imaging::writeTextAtomically((out / "scene.json").string(), toJson(scene_).dump(2) + "\n");
   metrics["snapshots"] = snapshots_.size();
   if (ctSnapshots_) {
@@ -102,8 +103,9 @@ void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging:
     const json sequence{{"frames", ctFrames_},
                         {"final_simulated_ct", "simulated_ct.nrrd"},
                         {"simulated_ct_hu_per_relative_density", huPerRelativeDensity_},
-                        {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the "
-                                 "last frame is simulated_ct.nrrd"}};
+                        {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the frames "
+                                 "cover the region of interest; the last frame is the final state, which "
+                                 "simulated_ct.nrrd holds on the input CT's grid"}};
     imaging::writeTextAtomically((out / "sequence.json").string(), sequence.dump(2) + "\n");
   }
   for (const auto& [name, text] : textFiles) imaging::writeTextAtomically((out / name).string(), text);

@@ -47,8 +47,11 @@ public:
   void snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow = nullptr);
   // The last snapshot (the final state), particles.pvd, tip_pressure.csv, simulated_ct.nrrd, scene.json,
   // sequence.json, the text files (name, content) given, then metrics.json (with the snapshot counts added).
+  // simulatedCt: on the region (the last frame of the X-ray series); simulatedCtFile: simulated_ct.nrrd (the
+  // input's grid, or the region's when cropped).
   void finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,
-              const std::vector<TipRecord>& tipSeries, std::optional<double> baselinePa, nlohmann::json& metrics,
+              const imaging::ImageType* simulatedCtFile, const std::vector<TipRecord>& tipSeries,
+              std::optional<double> baselinePa, nlohmann::json& metrics,
               const std::vector<std::pair<std::string, std::string>>& textFiles = {});
 
 private:

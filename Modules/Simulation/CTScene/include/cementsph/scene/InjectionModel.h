@@ -27,6 +27,7 @@
 #include <vtkSmartPointer.h>
 
 #include <array>
+#include <cstdint>
 #include <cstddef>
 #include <functional>
 #include <map>
@@ -102,6 +103,11 @@ struct InjectionResult {
   nlohmann::json metrics;                      // summary.toJson() merged with engineFigures (metrics.json)
   imaging::ImageType::Pointer simulatedCt;     // the (axis-aligned) CT's grid within the region of interest
   imaging::ImageType::Pointer regionCt;        // the same region of the CT the engine ran on, before cement
+  imaging::MaskType::Pointer cementLabels;     // on the region's grid (InjectionModel::cementLabels); null if none
+  // The simulated CT and labels as the files hold them: on the INPUT CT's own grid (its size, origin, spacing,
+  // direction; the input's HU outside the region), or the region's grid with InjectionRunOptions::cropToRegion.
+  imaging::ImageType::Pointer simulatedCtFile;
+  imaging::MaskType::Pointer cementLabelsFile;
   vtkSmartPointer<vtkPolyData> particles;      // the cement at the end (mm, the CT's frame, point arrays)
   std::vector<TipRecord> tipSeries;
 };
@@ -143,10 +149,10 @@ public:
   // The engine's figures: fills what it knows of the summary (spreading, pressures' baseline, leakage, ...) and
   // its own keys in engineFigures.
   virtual void report(InjectionSummary& summary, nlohmann::json& engineFigures) const = 0;
-  // Files of the engine's own (e.g. cement_labels.nrrd) in outDir, on the simulated CT's grid.
-  virtual void writeFiles(const std::string& outDir, const imaging::ImageType* simulatedCt) const {
-    (void)outDir, (void)simulatedCt;
-  }
+  // The cement label map per ROI voxel (PorousSolid::grid order): 0 none, 1 cement in bone (at least half a
+  // voxel's pores), 2 leaked (any cement outside bone); empty when the engine makes none. The driver writes it
+  // as cement_labels.nrrd on the same grid as simulated_ct.nrrd.
+  virtual std::vector<std::uint8_t> cementLabels() const { return {}; }
   // The pressure column tip_pressure.csv subtracts (none: the model's pressure has no baseline yet).
   virtual std::optional<double> pressureBaselinePa() const { return 0.0; }
 };

@@ -48,6 +48,9 @@ struct InjectionRunOptions {
   std::string outDir;               // empty: write no files
   double huPerRelativeDensity = 3000.0; // k of the simulated CT [HU]
   bool progress = false;            // a progress line on stderr (with an ETA when stderr is a terminal)
+  // simulated_ct.nrrd and cement_labels.nrrd on the region of interest's grid instead of the input CT's own
+  // (smaller files; the input-grid files subtract voxel by voxel from the input, in 3D Slicer or numpy).
+  bool cropToRegion = false;
   // Called now and then with the fraction of injection time done (0..1); return false to stop the run.
   std::function<bool(double)> onProgress;
 };

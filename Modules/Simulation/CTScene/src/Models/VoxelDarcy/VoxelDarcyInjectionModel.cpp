@@ -384,20 +384,15 @@ public:
     e["outlet_source_voxels"] = sourceVoxels;
   }
 
-  // cement_labels.nrrd on the simulated CT's grid (a label map for 3D Slicer and the cement picture): 1 where
-  // cement fills at least half a voxel's pores in bone, 2 where any cement is outside bone.
-  void writeFiles(const std::string& outDir, const imaging::ImageType* simCt) const override {
+  // 1 where cement fills at least half a voxel's pores in bone, 2 where any cement is outside bone.
+  std::vector<std::uint8_t> cementLabels() const override {
     const VoxelMedium& m = filling_->medium();
-    auto labels = imaging::MaskType::New();
-    labels->CopyInformation(simCt);
-    labels->SetRegions(simCt->GetLargestPossibleRegion());
-    labels->Allocate();
-    std::uint8_t* l = labels->GetBufferPointer();
+    std::vector<std::uint8_t> l(m.count(), 0);
     for (std::size_t c = 0; c < m.count(); ++c) {
       const bool leaked = !softTissue_.empty() && softTissue_[c] && filling_->fill()[c] > 0;
       l[c] = leaked ? 2 : filling_->fill()[c] >= 0.5 ? 1 : 0;
     }
-    imaging::writeMask(labels, (std::filesystem::path(outDir) / "cement_labels.nrrd").string());
+    return l;
   }
 
 private:
