@@ -131,7 +131,7 @@ cementsph::scene::SceneConfig sceneOf(const py::handle& scene) {
 }
 
 py::dict injectPy(const Volume& volume, const py::dict& geometry, const py::object& scene, const py::object& tip,
-                  const std::string& outDir, bool progress) {
+                  const std::string& outDir, bool progress, const py::object& boneMask) {
   cementsph::scene::SceneConfig s = sceneOf(scene);
   if (!tip.is_none()) {
     const auto t = tip.cast<std::vector<double>>();
@@ -142,6 +142,13 @@ py::dict injectPy(const Volume& volume, const py::dict& geometry, const py::obje
   auto ct = toImage(volume, geometry);
   auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
   filter->SetInputData(ct);
+  if (!boneMask.is_none()) {
+    const Volume mask = boneMask.cast<Volume>();
+    if (mask.ndim() != 3 || mask.shape(0) != volume.shape(0) || mask.shape(1) != volume.shape(1) ||
+        mask.shape(2) != volume.shape(2))
+      throw std::invalid_argument("bone_mask: an array of the volume's shape [z, y, x] is required");
+    filter->SetBoneMaskData(toImage(mask, geometry));
+  }
   filter->SetScene(s);
   filter->SetOutputDirectory(outDir);
   filter->SetPrintProgress(progress);
@@ -211,11 +218,12 @@ PYBIND11_MODULE(cementsph, m) {
       "-> every value resolved, as a dict");
 
   m.def("inject", &injectPy, py::arg("volume"), py::arg("geometry"), py::arg("scene"), py::arg("tip_mm") = py::none(),
-        py::arg("out_dir") = "", py::arg("progress") = false,
+        py::arg("out_dir") = "", py::arg("progress") = false, py::arg("bone_mask") = py::none(),
         "Injects cement into a CT (HU, [z, y, x]) at tip_mm (or the scene's tip_mm), through vtkSPHInjectionFilter "
         "with the GIL released. Returns a dict: metrics (metrics.json as a dict), summary (the typed summary), "
         "simulated_ct and labels (0 none, 1 cement, 2 leaked) on the INPUT grid ([z, y, x], geometry), "
-        "cement_points (N x 3, mm) and cement_arrays (their point arrays). out_dir: also write the run's files.");
+        "cement_points (N x 3, mm) and cement_arrays (their point arrays). out_dir: also write the run's files. "
+        "bone_mask: an array of the volume's shape, non-zero = bone; cement where it is 0 is labelled leaked (2).");
 
   m.def(
       "register",

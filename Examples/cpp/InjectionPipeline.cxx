@@ -1,5 +1,5 @@
 // The design's pipeline, every step a VTK filter joined by SetInputConnection:
-//   reader -> median -> threshold (the bone mask) -> injection -> isosurface of the cement label map
+//   reader -> threshold (the bone mask) -> injection -> threshold (cement labels) -> isosurface
 //   [-> surface distance to the post-injection CT's cement: reader -> registration -> threshold -> isosurface]
 // Usage: InjectionPipeline PRE_CT SCENE.json TIP_X TIP_Y TIP_Z OUT.vtp [POST_CT]
 //   e.g. InjectionPipeline Data/foam-phantom/pre.nrrd Data/scenes/paper-1ml.json 22.325 21.855 21.75 cement.vtp
@@ -13,11 +13,12 @@
 #include "vtkSPHInjectionFilter.h"
 
 #include <vtkFlyingEdges3D.h>
-#include <vtkImageMedian3D.h>
+#include <vtkImageData.h>
 #include <vtkImageThreshold.h>
 #include <vtkNew.h>
 #include <vtkXMLPolyDataWriter.h>
 
+#include <cstdint>
 #include <iostream>
 #include <string>
 
@@ -27,22 +28,22 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    // The pipeline. The bone mask: the specimen (pores ~0 HU, struts, shell) against fat (-100 HU) and air,
-    // after a 3x3x3 median so that the CT's noise (20 HU) leaves no speckle; cement outside it is leaked (2).
+    // The pipeline. The bone mask: the specimen (its fat-filled pores at -100 HU, struts, shell) against the
+    // air around it (-1000 HU), far from both at -500 HU whatever the noise; cement outside it is leaked (2).
     vtkNew<vtkCementSPHImageReader> reader;
     reader->SetFileName(argv[1]);
-    vtkNew<vtkImageMedian3D> median;
-    median->SetInputConnection(reader->GetOutputPort());
-    median->SetKernelSize(3, 3, 3);
     vtkNew<vtkImageThreshold> bone;
-    bone->SetInputConnection(median->GetOutputPort());
-    bone->ThresholdByUpper(-50.0), bone->SetInValue(1), bone->SetOutValue(0), bone->SetOutputScalarTypeToUnsignedChar();
+    bone->SetInputConnection(reader->GetOutputPort());
+    bone->ThresholdByUpper(-500.0), bone->SetInValue(1), bone->SetOutValue(0), bone->SetOutputScalarTypeToUnsignedChar();
     vtkNew<vtkSPHInjectionFilter> injection;
     injection->SetInputConnection(reader->GetOutputPort());
     injection->SetBoneMaskConnection(bone->GetOutputPort());
     injection->SetScene(cementsph::scene::loadSceneFile(argv[2], {"tip_mm=[" + std::string(argv[3]) + "," + argv[4] + "," + argv[5] + "]"}));
-    vtkNew<vtkFlyingEdges3D> surface; // labels 1 (cement) and 2 (leaked) against 0
-    surface->SetInputConnection(injection->GetOutputPort(vtkSPHInjectionFilter::LabelMapPort));
+    vtkNew<vtkImageThreshold> cement; // labels 1 (cement) and 2 (leaked) as 1: the 0.5-isosurface then lies midway
+    cement->SetInputConnection(injection->GetOutputPort(vtkSPHInjectionFilter::LabelMapPort));
+    cement->ThresholdByUpper(1), cement->SetInValue(1), cement->SetOutValue(0);
+    vtkNew<vtkFlyingEdges3D> surface;
+    surface->SetInputConnection(cement->GetOutputPort());
     surface->SetValue(0, 0.5);
     vtkNew<vtkXMLPolyDataWriter> writer;
     writer->SetInputConnection(surface->GetOutputPort());
@@ -74,8 +75,14 @@ int main(int argc, char** argv) {
     injection->RethrowIfFailed();
     if (argc == 8) post->RethrowIfFailed(), registration->RethrowIfFailed(), distance->RethrowIfFailed();
     const auto* s = injection->GetSummary();
+    vtkImageData* labels = injection->GetLabelMapOutput();
+    const auto* l = static_cast<const std::uint8_t*>(labels->GetScalarPointer());
+    vtkIdType cementVoxels = 0, leaked = 0;
+    for (vtkIdType i = 0; i < labels->GetNumberOfPoints(); ++i)
+      cementVoxels += l[i] == vtkSPHInjectionFilter::Cement, leaked += l[i] == vtkSPHInjectionFilter::LeakedCement;
     std::cout << "injected " << s->volumeInjectedMl << " ml in " << s->simulatedTimeS << " s (" << s->engine << "), tip pressure "
-              << s->finalTipPressurePa << " Pa, leaked " << s->leakageVolumeMl << " ml; surface " << argv[6];
+              << s->finalTipPressurePa << " Pa; label map: " << cementVoxels << " cement voxels, " << leaked
+              << " leaked; surface " << argv[6];
     if (argc == 8) std::cout << "; distance to the experiment's cement " << distance->GetErrorMm() << " mm (mean), "
                              << distance->GetHausdorff95Mm() << " mm (95 %)";
     std::cout << "\n";

@@ -12,7 +12,7 @@ PYTHONPATH=build/python and CEMENTSPH_DATA_DIR=Data.
     the spherical Darcy pressure mu Q / (4 pi k) (1.2 / a - 1 / R), k by Kozeny-Carman written out here, within
     10 %; the cement ball's radius from the label map (voxels at least half filled) is R = (3 V / (4 pi phi))^(1/3)
     within 3 %; the simulated CT rose by k_HU phi (3000 HU x porosity) in a filled voxel (1e-3 HU) and not at
-    all far from the cement (exact); no leak in intact bone.
+    all far from the cement (exact); no leak in intact bone; with a bone mask, leaked exactly where it is 0.
   * inject, the foam phantom (pore-resolved, porosity 1 in the pores): the cement points' volumes add up to
     flow x time (1e-9) and the label map holds it within 2 %; the outputs lie on the input grid.
   * the GIL is released during inject: another Python thread runs meanwhile.
@@ -138,6 +138,23 @@ class InjectUniformBlock(unittest.TestCase):
         # Far from the cement (a corner inside the cortex) nothing changed.
         np.testing.assert_array_equal(sim[:8, :8, :8], self.volume[:8, :8, :8])
         self.assertEqual(self.result["geometry"]["spacing_mm"], [0.5, 0.5, 0.5])
+
+
+    def test_bone_mask_decides_leaked_cement(self):
+        # The oracle is the mask itself: cement where it is 0 (z index >= 30, the tip's plane and beyond) is
+        # leaked (2), elsewhere cement (1).
+        mask = np.ones(self.volume.shape, np.uint8)
+        mask[30:] = 0
+        run = cementsph.inject(self.volume, self.geometry, {"volume_ml": 1.0, "cannula_wall": False},
+                               tip_mm=[15.0, 15.0, 15.0], bone_mask=mask)
+        labels = run["labels"]
+        self.assertEqual(np.count_nonzero(labels[30:] == 1), 0)
+        self.assertEqual(np.count_nonzero(labels[:30] == 2), 0)
+        self.assertGreater(np.count_nonzero(labels[30:] == 2), 100)
+        self.assertGreater(np.count_nonzero(labels[:30] == 1), 100)
+        with self.assertRaises(ValueError):
+            cementsph.inject(self.volume, self.geometry, {"volume_ml": 0.1}, tip_mm=[15.0, 15.0, 15.0],
+                             bone_mask=mask[:10])
 
 
 class InjectPhantom(unittest.TestCase):
