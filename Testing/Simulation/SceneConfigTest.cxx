@@ -186,7 +186,9 @@ TEST(SceneConfig, TheModelAndRheologyKeysAreReadAndCheckedNamingTheKey) {
            {"mixing_to_injection_s", -5.0},
            {"cannula_gauge", "99G"},
            {"cannula_gauge", "11G-thin"}, // no sourced thin-wall 11G
-           {"pressure_model", "magic"}}) {
+           // Not a model's name in form (a well-formed unknown name is the driver's to refuse, listing the
+           // registered models: InjectionModel.AnUnknownNameIsOneLineListingTheModels).
+           {"pressure_model", "Magic model!"}}) {
     json k = minimal();
     k[key] = bad;
     expectError(k, key);

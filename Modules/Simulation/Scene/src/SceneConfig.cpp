@@ -148,11 +148,14 @@ void applySceneJson(SceneConfig& s, const json& j) {
     else if (key == "max_displacement_over_h") s.maxDisplacementOverH = number(v, key);
     else if (key == "neighbour_skin_over_h") s.neighbourSkinOverH = number(v, key);
     else if (key == "pressure_model") {
+      // "auto" or a registered injection model's name; which names this build has is the driver's to say
+      // (InjectionModel.h: a model registered by a plug-in is a valid name too), here only its form.
       s.pressureModel = text(v, key);
-      if (s.pressureModel != "auto" && s.pressureModel != "voxel-darcy" && s.pressureModel != "incompressible" &&
-          s.pressureModel != "equation-of-state")
-        fail(key, "must be \"auto\", \"voxel-darcy\", \"incompressible\" or \"equation-of-state\" (got \"" +
-                      s.pressureModel + "\")");
+      const bool nameLike = !s.pressureModel.empty() && s.pressureModel.size() <= 40 &&
+                            s.pressureModel.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-") == std::string::npos;
+      if (!nameLike)
+        fail(key, "must be \"auto\" or an injection model's name, e.g. \"voxel-darcy\", \"incompressible\", "
+                  "\"equation-of-state\" (got \"" + shown(s.pressureModel) + "\")");
     } else if (key == "pore_permeability_m2") {
       s.porePermeabilityM2 = number(v, key);
     } else if (key == "capillary_tension_n_per_m") {
@@ -203,6 +206,9 @@ void applySceneJson(SceneConfig& s, const json& j) {
     else if (key == "stop_at_first_leak") {
       if (!v.is_boolean()) fail(key, "must be true or false");
       s.stopAtFirstLeak = v.get<bool>();
+    } else if (key == "allow_tip_outside_bone") {
+      if (!v.is_boolean()) fail(key, "must be true or false");
+      s.allowTipOutsideBone = v.get<bool>();
     } else if (key == "second_tip_withdrawal_mm") s.secondTipWithdrawalMm = number(v, key);
     else if (key == "second_tip_volume_ml") s.secondTipVolumeMl = number(v, key);
     else if (key == "cannula_gauge") {
@@ -468,6 +474,7 @@ json toJson(const SceneConfig& s) {
   j["soft_tissue_max_hu"] = s.bone.softTissueMaxHu;
   j["soft_tissue_permeability_m2"] = s.bone.softTissuePermeabilityM2;
   j["stop_at_first_leak"] = s.stopAtFirstLeak;
+  j["allow_tip_outside_bone"] = s.allowTipOutsideBone;
   if (s.secondTipWithdrawalMm) {
     j["second_tip_withdrawal_mm"] = *s.secondTipWithdrawalMm;
     j["second_tip_volume_ml"] = s.secondTipVolumeMl;

@@ -8,6 +8,9 @@
 // Slicer opens as a segmentation.
 #include "cementsph/scene/InjectionModel.h"
 
+#include "cementsph/anatomy/LeakSites.h"
+#include "cementsph/anatomy/VertebraAnatomy.h"
+
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/BoneCalibration.h"
 #include "cementsph/scene/SimulatedCT.h"
@@ -45,6 +48,10 @@ namespace {
 // The cannula's wall thickness [m] where the scene gives none: 11G regular wall, outer 3.048 mm against
 // inner 2.388 mm (ISO 9626).
 constexpr double kCannulaWallM = 0.33e-3;
+
+// The edge of the cube the bone rule classifies about the tip [mm]: a lumbar body is 40-50 mm wide and its
+// neighbours' end plates lie within 30 mm above and below; the rule needs the whole shell (VertebraAnatomy.h).
+constexpr double kAnatomyCubeMm = 100.0;
 
 
 // Capillary entry pressure of each pore voxel [Pa]: Young-Laplace for the cement entering a pore of the
@@ -212,17 +219,20 @@ public:
     medium.porosity.assign(medium.count(), 1.0f);
     medium.permeability.assign(medium.count(), poreK_);
     if (continuum_) {
-      // Each voxel's porosity and permeability from its HU (BoneCalibration.h); soft tissue is where cement leaks.
-      softTissue_.assign(medium.count(), 0);
+      // Which tissue each voxel is (Modules/Simulation/Anatomy): the target vertebra closed over its marrow,
+      // disc, canal, vessel, ...; cement outside the target is leakage. The tip must be in the target.
+      classifyTissues(*in.ct, solid, scene);
+      // Each voxel's porosity and permeability from its HU (BoneCalibration.h). Marrow fat inside the target
+      // (below soft_tissue_max_hu, enclosed by cortex) is bone at its most porous, not an open leak path.
       const auto start = in.ct->GetLargestPossibleRegion().GetIndex();
       for (std::size_t c = 0; c < medium.count(); ++c) {
         const auto v = medium.ijk(c);
         imaging::ImageType::IndexType idx;
         for (unsigned a = 0; a < 3; ++a) idx[a] = start[a] + solid.roiStart[a] + v[a];
-        const double hu = in.ct->GetPixel(idx);
+        double hu = in.ct->GetPixel(idx);
+        if (!leak_[c] && scene.bone.tissue(hu) == BoneCalibration::Tissue::SoftTissue) hu = scene.bone.softTissueMaxHu;
         medium.porosity[c] = float(scene.bone.porosity(hu));
         medium.permeability[c] = scene.bone.permeability(hu);
-        softTissue_[c] = scene.bone.tissue(hu) == BoneCalibration::Tissue::SoftTissue;
       }
     } else {
       for (std::size_t c = 0; c < medium.count(); ++c)
@@ -287,7 +297,7 @@ public:
   TipRecord outlet() const override { return outlet_; }
   double injectedVolumeM3() const override { return filling_->injectedVolume(); }
   double cementVolumeM3() const override { return filling_->cementVolume(); }
-  double leakedVolumeM3() const override { return softTissue_.empty() ? 0.0 : leakage(*filling_, softTissue_, nullptr); }
+  double leakedVolumeM3() const override { return leak_.empty() ? 0.0 : leakage(*filling_, leak_, nullptr); }
 
   std::string state() const override {
     return std::to_string(filling_->statistics().lastUnknowns) + " filled voxels, " +
@@ -338,12 +348,29 @@ public:
     s.fluidInSolidFraction = 0.0; // closed voxels never take cement
     s.finalViscosityPaS = std::clamp(scene.curingFactor(filling.time()) * viscosity_->at(filling.time()), lower_, upper_);
     s.leakageAssessed = continuum_; // a pore-resolved CT has no soft tissue class: not assessed
-    if (continuum_) {
+    if (continuum_ && anatomy_) {
+      // Leak sites by anatomical class: disc, canal, venous, other bone, cortex breach (LeakSites.h).
+      std::vector<double> fill(m.count()), arrival(m.count()), porosity(m.count());
+      for (std::size_t c = 0; c < m.count(); ++c) {
+        fill[c] = filling.fill()[c];
+        arrival[c] = std::isfinite(filling.arrivalTime()[c]) ? filling.arrivalTime()[c] : -1.0;
+        porosity[c] = m.porosity[c];
+      }
+      const anatomy::LeakReport report = anatomy::classifyLeaks(*anatomy_, fill, arrival, porosity);
+      s.leakageVolumeMl = report.leakedMl;
+      for (const anatomy::LeakSite& site : report.sites)
+        s.leakageSites.push_back({site.positionMm, site.firstTimeS, site.volumeMl, site.kind});
+      e["anatomy"] = anatomy_->toJson();
+      e["leakage_by_class"] = report.toJson();
+    } else if (continuum_) {
       json sites;
-      s.leakageVolumeMl = leakage(filling, softTissue_, &sites) * 1e6;
+      s.leakageVolumeMl = leakage(filling, leak_, &sites) * 1e6;
       for (const json& site : sites)
         s.leakageSites.push_back({site.at("position_mm").get<std::array<double, 3>>(), site.at("first_time_s").get<double>(),
                                   site.at("volume_ml").get<double>(), "soft-tissue"});
+    }
+    if (continuum_) {
+      e["leak_rule"] = leakRule_;
       e["bone_calibration"] = {{"marrow_hu", scene.bone.marrowHu},
                                {"bone_tissue_hu", scene.bone.boneTissueHu},
                                {"kozeny_carman_diameter_mm", scene.bone.kozenyCarmanDiameterMm},
@@ -389,13 +416,96 @@ public:
     const VoxelMedium& m = filling_->medium();
     std::vector<std::uint8_t> l(m.count(), 0);
     for (std::size_t c = 0; c < m.count(); ++c) {
-      const bool leaked = !softTissue_.empty() && softTissue_[c] && filling_->fill()[c] > 0;
+      const bool leaked = !leak_.empty() && leak_[c] && filling_->fill()[c] > 0;
       l[c] = leaked ? 2 : filling_->fill()[c] >= 0.5 ? 1 : 0;
     }
     return l;
   }
 
 private:
+  // The tissue classes of the region (leak_ and anatomy_). The bone rule runs on a cube of kAnatomyCubeMm about
+  // the tip (a vertebra is larger than the region of interest, and the rule needs its whole shell), and the
+  // region takes its voxels' classes. Where no walled vertebra is found around the tip (a block of bone, a
+  // synthetic half-space), the HU rule stays: cement in voxels below soft_tissue_max_hu is leakage.
+  void classifyTissues(const imaging::ImageType& ct, const PorousSolid& solid, const SceneConfig& scene) {
+    const std::size_t n = solid.grid.count();
+    leak_.assign(n, 0);
+    const auto region = ct.GetLargestPossibleRegion();
+    // Region voxel c as CT index (relative to the CT region's start), x fastest.
+    auto roiIndex = [&](std::size_t c) {
+      const long nx = solid.grid.size[0], ny = solid.grid.size[1], cc = long(c);
+      return std::array<long, 3>{solid.roiStart[0] + cc % nx, solid.roiStart[1] + (cc / nx) % ny,
+                                 solid.roiStart[2] + cc / (nx * ny)};
+    };
+    const Eigen::Vector3d tipMm = *scene.tipMm;
+    // The cube, clipped to the CT (voxel indices relative to the region's start).
+    std::array<long, 3> lo{}, count{};
+    for (unsigned a = 0; a < 3; ++a) {
+      const double s = ct.GetSpacing()[a];
+      const long centre = long(std::lround((tipMm[int(a)] - ct.GetOrigin()[a]) / s)) - long(region.GetIndex()[a]);
+      const long half = long(std::ceil(0.5 * kAnatomyCubeMm / s));
+      lo[a] = std::max(0L, centre - half);
+      count[a] = std::min(long(region.GetSize()[a]), centre + half + 1) - lo[a];
+    }
+    anatomy::Grid grid;
+    std::vector<float> hu;
+    hu.reserve(std::size_t(count[0] * count[1] * count[2]));
+    for (unsigned a = 0; a < 3; ++a) {
+      grid.size[a] = int(count[a]);
+      grid.spacingMm[a] = ct.GetSpacing()[a];
+      grid.originMm[a] = ct.GetOrigin()[a] + double(region.GetIndex()[a] + lo[a]) * ct.GetSpacing()[a];
+    }
+    for (long k = 0; k < count[2]; ++k)
+      for (long j = 0; j < count[1]; ++j)
+        for (long i = 0; i < count[0]; ++i)
+        {
+          imaging::ImageType::IndexType idx;
+          idx[0] = region.GetIndex()[0] + lo[0] + i;
+          idx[1] = region.GetIndex()[1] + lo[1] + j;
+          idx[2] = region.GetIndex()[2] + lo[2] + k;
+          hu.push_back(ct.GetPixel(idx));
+        }
+    anatomy::AnatomyOptions options;
+    options.softTissueMaxHu = scene.bone.softTissueMaxHu;
+    options.corticalHu = scene.bone.corticalHu;
+    const std::array<double, 3> tip{tipMm.x(), tipMm.y(), tipMm.z()};
+    anatomy::Anatomy cube = anatomy::classifyAnatomyFromCT(hu.data(), grid, tip, options);
+    if (!cube.targetFound) {
+      leakRule_ = "hu: cement below soft_tissue_max_hu is leakage (no vertebra walled by cortex around the tip: " +
+                  cube.description + ")";
+      for (std::size_t c = 0; c < n; ++c) {
+        const auto v = roiIndex(c);
+        imaging::ImageType::IndexType idx;
+        for (unsigned a = 0; a < 3; ++a) idx[a] = region.GetIndex()[a] + v[a];
+        const double h = ct.GetPixel(idx);
+        leak_[c] = scene.bone.tissue(h) == BoneCalibration::Tissue::SoftTissue;
+      }
+      return;
+    }
+    anatomy::requireTipInVertebra(cube, hu.data(), tip, scene.allowTipOutsideBone);
+    // The region's classes from the cube (the same grid, offset by the region's start).
+    anatomy::Anatomy roi;
+    roi.rule = cube.rule;
+    roi.description = cube.description;
+    roi.targetFound = true;
+    roi.targetCentroidMm = cube.targetCentroidMm;
+    for (unsigned a = 0; a < 3; ++a) {
+      roi.grid.size[a] = solid.grid.size[int(a)];
+      roi.grid.spacingMm[a] = solid.grid.spacing[int(a)] * 1e3;
+      roi.grid.originMm[a] = solid.grid.origin[int(a)] * 1e3;
+    }
+    roi.classes.assign(n, std::uint8_t(anatomy::TissueClass::OtherSoftTissue));
+    for (std::size_t c = 0; c < n; ++c) {
+      const auto v = roiIndex(c);
+      const long i = v[0] - lo[0], j = v[1] - lo[1], k = v[2] - lo[2];
+      if (i >= 0 && j >= 0 && k >= 0 && i < count[0] && j < count[1] && k < count[2])
+        roi.classes[c] = cube.classes[std::size_t(i + count[0] * (j + count[1] * k))];
+      leak_[c] = roi.at(c) != anatomy::TissueClass::TargetVertebra;
+    }
+    leakRule_ = "anatomy (" + cube.rule + "): cement outside the target vertebra is leakage; " + cube.description;
+    anatomy_ = std::move(roi);
+  }
+
   // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it): voxels more
   // than half a voxel behind the outlet plane, so that the voxel holding the tip stays open wherever the tip
   // falls within it. With a second tip, the stretch of the shaft between the two outlets opens when the
@@ -448,7 +558,9 @@ private:
   double lower_ = 0, upper_ = 0, secondTipStart_ = 0, withdrawal_ = 0;
   double cachedFactor_ = -1, cachedCannula_ = 0;
   Eigen::Vector3d tip_, axis_;
-  std::vector<std::uint8_t> softTissue_; // continuum: voxels outside bone, where cement is leakage
+  std::vector<std::uint8_t> leak_; // continuum: voxels outside the target bone, where cement is leakage
+  std::optional<anatomy::Anatomy> anatomy_; // continuum: the tissue classes on the region's grid
+  std::string leakRule_;
   std::size_t shaftVoxels_ = 0;
   std::vector<std::size_t> tractVoxels_;
   std::vector<float> tractPorosity_;

@@ -62,7 +62,10 @@
 //                                   there), pore-resolved otherwise                              auto
 //   marrow_hu, bone_tissue_hu, kozeny_carman_diameter_mm, cortical_hu, soft_tissue_max_hu,
 //   soft_tissue_permeability_m2     the continuum's calibration              0, 1400, 0.3, 350, 40, 1e-7
-//   stop_at_first_leak (bool)       continuum: stop the injection when cement first reaches soft tissue false
+//   stop_at_first_leak (bool)       continuum: stop the injection when cement first leaves the target
+//                                   vertebra (Modules/Simulation/Anatomy)                        false
+//   allow_tip_outside_bone (bool)   continuum: run although the tip is in disc, canal, vessel, soft tissue
+//                                   or air (a deliberate injection there); otherwise refused     false
 //   second_tip_withdrawal_mm, second_tip_volume_ml   voxel-darcy: a second tip on the same trajectory (the
 //                                   two-depth technique): once volume_ml - second_tip_volume_ml is in, the
 //                                   cannula is withdrawn this far along its axis (the tract it leaves opens to
@@ -132,6 +135,7 @@ struct SceneConfig {
   std::string boneModel = "auto";
   BoneCalibration bone;
   bool stopAtFirstLeak = false;
+  bool allowTipOutsideBone = false;
   std::optional<double> secondTipWithdrawalMm; // a second tip this far back along the axis; none: one tip
   double secondTipVolumeMl = 0.0;              // of volume_ml, injected at the second tip
   double curingFactor(double timeSinceInjectionStartS) const;
