@@ -5,6 +5,7 @@
 #include "ScaffoldCT.h"
 
 #include "cementsph/imaging/ItkVtkBridge.h"
+#include "cementsph/imaging/VolumeIO.h"
 #include "vtkSPHInjectionFilter.h"
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 #include <vtkTrivialProducer.h>
 
 #include <cstdint>
+#include <filesystem>
 
 #include <cmath>
 
@@ -232,4 +234,68 @@ TEST(SPHInjectionFilter, BoneMaskDecidesLeakedCement) {
   EXPECT_NE(filter->GetErrorMessage().find("not on the CT's grid"), std::string::npos) << filter->GetErrorMessage();
   EXPECT_EQ(filter->GetErrorMessage().find('\n'), std::string::npos);
   EXPECT_EQ(filter->GetMetricsJSON(), "");
+}
+
+// A particle engine (the equation of state) has no per-voxel fill: the label map is where the simulated CT
+// rose by at least k/2 = 1500 HU (cement density at least half rho0). The oracle is that rule applied here to
+// the two images voxel by voxel (and the input's own values), plus the tip's voxel holding cement.
+TEST(SPHInjectionFilter, ParticleEngineLabelsWhereTheCTRoseByHalfK) {
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(cementsph::scene::testing::scaffold());
+  ProgressLog log;
+  auto filter = makeFilter(ct, log);
+  cementsph::scene::SceneConfig scene = filter->GetScene();
+  scene.pressureModel = "equation-of-state";
+  filter->SetScene(scene);
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  ASSERT_EQ(filter->GetCementPointsOutput()->GetPointData()->GetArray("fill_fraction"), nullptr); // particles
+  const auto* l = static_cast<const std::uint8_t*>(filter->GetLabelMapOutput()->GetScalarPointer());
+  vtkImageData* sim = filter->GetSimulatedCTOutput();
+  std::size_t cement = 0, disagree = 0;
+  for (int k = 0; k < 40; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i) {
+        const bool rose = sim->GetScalarComponentAsDouble(i, j, k, 0) - ct->GetScalarComponentAsDouble(i, j, k, 0) >= 1500.0;
+        const std::uint8_t v = l[flat(i, j, k)];
+        cement += v == vtkSPHInjectionFilter::Cement;
+        disagree += rose != (v == vtkSPHInjectionFilter::Cement) || v == vtkSPHInjectionFilter::LeakedCement;
+      }
+  EXPECT_EQ(disagree, 0u);
+  EXPECT_GT(cement, 100u);
+  EXPECT_EQ(l[flat(26, 26, 27)], vtkSPHInjectionFilter::Cement); // half a millimetre ahead of the tip
+}
+
+// The label map is the engine's own (the driver's cement_labels.nrrd on the input grid, written by another code
+// path: InjectionDriver's labelsOnInputGrid) voxel for voxel, whether the filter takes it from the files'
+// image (OutputDirectory set) or maps the region's labels itself (no files). The oracle is the file.
+TEST(SPHInjectionFilter, LabelMapIsTheEnginesCementLabelsFile) {
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(cementsph::scene::testing::scaffold());
+  ct->SetOrigin(1.0, -2.0, 0.5);
+  ProgressLog log;
+  auto filter = makeFilter(ct, log);
+  filter->SetTipMm(13 + 1.0, 13 - 2.0, 13 + 0.5);
+  const auto dir = std::filesystem::path(CEMENTSPH_BINARY_DIR) / "Testing" / "SPHInjectionFilterLabels";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  filter->SetOutputDirectory(dir.string());
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  const auto file = cementsph::imaging::readVolume((dir / "cement_labels.nrrd").string());
+  vtkSmartPointer<vtkImageData> withFiles = vtkSmartPointer<vtkImageData>::New();
+  withFiles->DeepCopy(filter->GetLabelMapOutput());
+  filter->SetOutputDirectory("");
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  vtkImageData* withoutFiles = filter->GetLabelMapOutput();
+  ASSERT_EQ(file->GetLargestPossibleRegion().GetNumberOfPixels(), std::size_t(withoutFiles->GetNumberOfPoints()));
+  const auto* a = static_cast<const std::uint8_t*>(withFiles->GetScalarPointer());
+  const auto* b = static_cast<const std::uint8_t*>(withoutFiles->GetScalarPointer());
+  const float* f = file->GetBufferPointer();
+  std::size_t differ = 0, cement = 0;
+  for (vtkIdType i = 0; i < withoutFiles->GetNumberOfPoints(); ++i) {
+    differ += float(a[i]) != f[i] || float(b[i]) != f[i];
+    cement += f[i] == 1.f;
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(cement, 500u);
 }

@@ -6,7 +6,7 @@
 //   geometry in the CT's patient frame, LPS; any direction matrix: AxisAlignedCT.h).
 // Input port 1 (optional): a bone mask on the SAME grid (same dimensions; non-zero = bone), e.g. a
 //   vtkImageThreshold of the CT or a segmentation from 3D Slicer. No engine reads it (they build their solid
-//   from the CT's HU and the scene's threshold_hu / bone model): it only decides the label map's classes
+//   from the CT's HU and the scene's threshold_hu / bone model): it only adds to the label map's leaked class
 //   (output 1): cement in a voxel the mask marks 0 is leaked. Not on the input's grid: an error (one line).
 // Output port 0: the simulated CT, float vtkImageData on the INPUT's grid (its extent, origin, spacing and
 //   direction): the input's HU outside the region of interest, inside it the input's HU plus the change the
@@ -14,13 +14,14 @@
 //   axis-aligned grid (InputGridPaste.h: exact for axial, flipped and axis-swapped CTs, interpolated for
 //   oblique ones). The simulated CT minus the input is therefore the injection's change voxel by voxel.
 // Output port 1: the cement label map, unsigned char vtkImageData on the input's grid: 0 no cement, 1 cement,
-//   2 leaked cement. Where the engine gives the cement per voxel (its points carry fill_fraction: the
-//   voxel-grid Darcy engine), 1 where the voxel's pores are at least half filled, as the engine's own
-//   cement_labels.nrrd; otherwise (particles) 1 where the simulated CT rose by at least k/2 (cement density
-//   at least half rho0, the threshold the phantom's cement uses). 2, for any cement: in a voxel the bone
-//   mask (input 1) marks 0 or, without a mask, where the engine assessed leakage (continuum bone) and the
-//   voxel is soft tissue by the scene's HU rule (BoneCalibration.h), the engine's own rule. The voxel-engine
-//   rule maps each cement voxel centre to the nearest input voxel: exact for axial and reoriented CTs.
+//   2 leaked cement. From an engine that labels its cement (InjectionModel::cementLabels; the voxel-grid Darcy
+//   engine: 1 where a voxel's pores are at least half filled, 2 any cement outside bone by its soft-tissue
+//   rule) those labels, each input voxel taking the region voxel nearest its centre: the same map as
+//   cement_labels.nrrd (exact for axial and reoriented CTs). From an engine without labels (particles): 1
+//   where the simulated CT rose by at least k/2 (cement density at least half rho0, the threshold the
+//   phantom's cement uses), 2 there where the engine assessed leakage (continuum bone) and the voxel is soft
+//   tissue by the scene's HU rule (BoneCalibration.h). With a bone mask (input 1): cement (1) in a voxel the
+//   mask marks 0 is leaked (2).
 // Output port 2: the cement as points, vtkPolyData (mm, the CT's frame): the particles of a particle engine
 //   (velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s, ...) or one point per voxel holding cement
 //   (fill_fraction, cement_volume_mm3, ...), InjectionModel::cement().

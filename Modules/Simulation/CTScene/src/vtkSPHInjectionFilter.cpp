@@ -29,9 +29,9 @@ using SDDP = vtkStreamingDemandDrivenPipeline;
 
 // The cement label map on the input's grid (the rules are in the header, output port 1).
 vtkSmartPointer<vtkImageData> cementLabels(vtkImageData* input, const cementsph::imaging::ImageType* ct,
-                                           const cementsph::imaging::ImageType* simulated, vtkPolyData* cement,
-                                           vtkImageData* mask, const cementsph::scene::SceneConfig& scene,
-                                           const cementsph::scene::InjectionSummary& summary, double huPerRelativeDensity) {
+                                           const cementsph::imaging::ImageType* simulated,
+                                           const cementsph::scene::InjectionResult& r, vtkImageData* mask,
+                                           const cementsph::scene::SceneConfig& scene, double huPerRelativeDensity) {
   auto labels = vtkSmartPointer<vtkImageData>::New();
   labels->SetExtent(input->GetExtent());
   labels->SetOrigin(input->GetOrigin());
@@ -42,46 +42,44 @@ vtkSmartPointer<vtkImageData> cementLabels(vtkImageData* input, const cementsph:
   auto* l = static_cast<std::uint8_t*>(labels->GetScalarPointer());
   const vtkIdType count = labels->GetNumberOfPoints();
   std::fill(l, l + count, std::uint8_t(vtkSPHInjectionFilter::NoCement));
-  // ITK's buffer and VTK's points share one order (x fastest), both over the input's whole grid.
+  // ITK's buffers and VTK's points share one order (x fastest), all over the input's whole grid.
   const float* hu = ct->GetBufferPointer();
-  const float* sim = simulated->GetBufferPointer();
-  vtkDataArray* maskValues = mask ? mask->GetPointData()->GetScalars() : nullptr;
-  auto leaked = [&](vtkIdType i) {
-    if (maskValues) return maskValues->GetComponent(i, 0) == 0.0;
-    return summary.leakageAssessed &&
-           scene.bone.tissue(double(hu[i])) == cementsph::scene::BoneCalibration::Tissue::SoftTissue;
-  };
-  vtkDataArray* fill = cement ? cement->GetPointData()->GetArray("fill_fraction") : nullptr;
-  if (fill) {
-    // One point per voxel holding cement, at its centre on the axis-aligned grid: the nearest input voxel.
+  if (const cementsph::imaging::MaskType* file = r.cementLabelsFile;
+      file && file->GetLargestPossibleRegion() == ct->GetLargestPossibleRegion()) {
+    // The engine's labels as the driver wrote them on the input grid (cement_labels.nrrd).
+    std::copy(file->GetBufferPointer(), file->GetBufferPointer() + count, l);
+  } else if (const cementsph::imaging::MaskType* region = r.cementLabels) {
+    // The engine's labels on the (axis-aligned) region: each input voxel takes the region voxel nearest its
+    // centre (labels are not interpolated), as the driver's file does; exact for axial and reoriented CTs.
     int extent[6];
     input->GetExtent(extent);
-    const vtkIdType nx = extent[1] - extent[0] + 1, ny = extent[3] - extent[2] + 1;
-    for (vtkIdType p = 0; p < cement->GetNumberOfPoints(); ++p) {
-      const double f = fill->GetTuple1(p);
-      if (!(f > 0)) continue;
-      double x[3], ijk[3];
-      cement->GetPoint(p, x);
-      labels->TransformPhysicalPointToContinuousIndex(x, ijk);
-      vtkIdType index[3];
-      bool inside = true;
-      for (int a = 0; a < 3; ++a) {
-        index[a] = vtkIdType(std::lround(ijk[a]));
-        inside = inside && index[a] >= extent[2 * a] && index[a] <= extent[2 * a + 1];
-      }
-      if (!inside) continue;
-      const vtkIdType i = (index[0] - extent[0]) + nx * ((index[1] - extent[2]) + ny * (index[2] - extent[4]));
-      std::uint8_t label = leaked(i) ? vtkSPHInjectionFilter::LeakedCement
-                                     : f >= 0.5 ? vtkSPHInjectionFilter::Cement : vtkSPHInjectionFilter::NoCement;
-      if (label > l[i]) l[i] = label;
-    }
-    return labels;
+    vtkIdType i = 0;
+    for (int z = extent[4]; z <= extent[5]; ++z)
+      for (int y = extent[2]; y <= extent[3]; ++y)
+        for (int x = extent[0]; x <= extent[1]; ++x, ++i) {
+          double centre[3];
+          input->TransformContinuousIndexToPhysicalPoint(x, y, z, centre);
+          cementsph::imaging::MaskType::PointType p;
+          for (unsigned a = 0; a < 3; ++a) p[a] = centre[a];
+          cementsph::imaging::MaskType::IndexType index;
+          if (region->TransformPhysicalPointToIndex(p, index)) l[i] = region->GetPixel(index);
+        }
+  } else {
+    // An engine without labels (particles): the simulated CT rose by at least k/2 (cement at half its rest
+    // density or more); leaked where the engine assessed leakage and the voxel is soft tissue (its HU rule).
+    const float* sim = simulated->GetBufferPointer();
+    const double rise = 0.5 * huPerRelativeDensity;
+    for (vtkIdType i = 0; i < count; ++i)
+      if (double(sim[i]) - double(hu[i]) >= rise)
+        l[i] = r.summary.leakageAssessed &&
+                       scene.bone.tissue(double(hu[i])) == cementsph::scene::BoneCalibration::Tissue::SoftTissue
+                   ? vtkSPHInjectionFilter::LeakedCement
+                   : vtkSPHInjectionFilter::Cement;
   }
-  // Particles: the simulated CT rose by at least k/2 (cement at half its rest density or more).
-  const double rise = 0.5 * huPerRelativeDensity;
-  for (vtkIdType i = 0; i < count; ++i)
-    if (double(sim[i]) - double(hu[i]) >= rise)
-      l[i] = leaked(i) ? vtkSPHInjectionFilter::LeakedCement : vtkSPHInjectionFilter::Cement;
+  // The bone mask: cement in a voxel it marks 0 is leaked.
+  if (vtkDataArray* m = mask ? mask->GetPointData()->GetScalars() : nullptr)
+    for (vtkIdType i = 0; i < count; ++i)
+      if (l[i] == vtkSPHInjectionFilter::Cement && m->GetComponent(i, 0) == 0.0) l[i] = vtkSPHInjectionFilter::LeakedCement;
   return labels;
 }
 
@@ -261,7 +259,7 @@ int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** i
     const auto full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
     vtkSmartPointer<vtkImageData> image = cementsph::imaging::toVtk(full);
     vtkSmartPointer<vtkImageData> labelMap =
-        cementLabels(input, ct, full, r.particles, mask, scene, r.summary, this->HUPerRelativeDensity);
+        cementLabels(input, ct, full, r, mask, scene, this->HUPerRelativeDensity);
     simulated->ShallowCopy(image);
     simulated->GetPointData()->GetScalars()->SetName("simulated_ct_hu");
     // The input's own extent numbering (toVtk starts at 0; a cropped reader's output need not).
