@@ -6,11 +6,13 @@ namespace cementsph::scene {
 
 std::unique_ptr<InjectionModel> makeParticleInjectionModel();   // src/Models/Particles
 std::unique_ptr<InjectionModel> makeVoxelDarcyInjectionModel(); // src/Models/VoxelDarcy
+std::unique_ptr<InjectionModel> makeParticleDarcyInjectionModel(); // src/Models/ParticleDarcy
 
 void registerBuiltInInjectionModels(InjectionModelRegistry& r) {
   r.add("voxel-darcy", makeVoxelDarcyInjectionModel, "incompressible-darcy-on-voxels");
   r.add("incompressible", makeParticleInjectionModel, "incompressible-darcy-on-particles");
   r.add("equation-of-state", makeParticleInjectionModel, "weakly-compressible");
+  r.add("particle-darcy", makeParticleDarcyInjectionModel, "incompressible-darcy-on-particles-isph");
 }
 
 } // namespace cementsph::scene

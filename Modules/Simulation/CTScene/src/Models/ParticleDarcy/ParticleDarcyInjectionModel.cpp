@@ -1,0 +1,682 @@
+// An incompressible SPH for creeping Darcy flow (issue 19, item 2), registered as "particle-darcy"
+// ("incompressible-darcy-on-particles-isph"): a projection ISPH (Cummins & Rudman 1999, J Comput Phys
+// 152:584) whose "projection" is Darcy's law itself, with the drag implicit in it.
+//
+// Model (SI inside; assumptions and regime):
+//  * Creeping flow (Re << 1, inertia dropped) of an incompressible Newtonian cement (the scene's viscosity
+//    schedule mu(t)) through a rigid pore-resolved medium: pore voxels open (porosity phi = 1, permeability k
+//    = pore_permeability_m2, or the preset's k0 = h^5 / (Cf d^3) as the voxel model), solid voxels closed.
+//    Darcy's law u = -(M / phi) grad p, M = k / mu; div(M grad p) = -s with s the cannula's outflow. The
+//    displaced fluid is at p = 0 (gauge) at the front (its viscosity neglected; cement/marrow ratio >> 1).
+//    Dimensionless: the Darcy number k / d^2 and Re enter nowhere (no inertia); the solution scales with
+//    mu Q / k, so the pressure is proportional to mu and the motion independent of it (exactly, here: the
+//    CG is scale-equivariant and the step is chosen by displacement).
+//  * Particles on a lattice of spacing d = 2 particle_radius_mm each carry a fixed cement volume phi d^3:
+//    the cement's volume is the count times that, exact; the emitted volume is inserted one particle at a
+//    time as it accumulates.
+//  * Kernel: Wendland C2 (Wendland 1995), h = 1.5 d, support 2h; F(r) = -dW/dr >= 0.
+//  * Pressure: -div(M grad p) = s with the symmetric pairwise Laplacian of Brookshaw 1985 (Proc. ASA 6:207)
+//    / Cleary & Monaghan 1999 (J Comput Phys 148:227): A_ii = sum_j w_ij + g_i, A_ij = -w_ij,
+//    w_ij = 2 V_i V_j M_ij F(r_ij) / r_ij (M_ij the harmonic mean of the mobilities, V the particles' space
+//    volume d^3), b_i = Q_i. Symmetric positive definite: Eigen's ConjugateGradient (Jacobi), warm-started.
+//  * The free surface needs no threshold on a particle indicator: g_i is the part of particle i's support
+//    that falls on OPEN pore space not occupied by cement (the CT's pore voxels farther than 0.9 d from every
+//    particle: a near-lattice covers every interior point within sqrt(3)/2 d), each such voxel a ghost at
+//    p = 0 (a ghost-fluid Dirichlet condition as the voxel model's, Gibou et al. 2002). Interior particles
+//    have g_i = 0 exactly; a void that opens inside the cement becomes open space at p = 0 and draws cement
+//    into it. Solid voxels and the region's sides contribute nothing (no flux, a Neumann condition), so no
+//    pressure drives cement into solid.
+//  * Velocity: u_i = -(M_i / phi) grad p_i with the corrected (renormalised) gradient of Bonet & Lok 1999
+//    (Comput Methods Appl Mech Eng 180:97), grad p_i = B_i^-1 sum_j V_j (F/r)(p_j - p_i)(x_j - x_i),
+//    B_i = sum_j V_j (F/r)(x_j - x_i)(x_j - x_i)^T, over the cement and the same p = 0 ghosts.
+//  * No penetration: a particle never steps into a closed voxel (solid, the cannula's shaft, outside the
+//    region): its step is taken axis by axis and a component that would cross into one is dropped.
+//  * The outlet (the cannula as a flux inlet, the voxel model's source ball): the flow rate Q is spread over
+//    the particles within a = max(inner radius, d) of the tip with the weight w(r) = (1 - (r/a)^2)^2,
+//    Q_i = Q w_i / sum w. The outlet (tip) pressure is the same weighted mean of p (Q p_tip is the power the
+//    cannula delivers). For a spherical source of this profile in a uniform medium the continuum gives
+//    p_tip = mu Q / (4 pi k)(1/r0 - 1/R) with 1/r0 = 1/a + int_0^a f(r)^2 / r^2 dr, f the enclosed share of
+//    the source (reported as outlet_effective_radius_mm). New particles go into the outlet ball's largest
+//    gap (the farthest candidate point, on a d/2 lattice, from every particle) once the emitted volume holds
+//    one particle's; the first ones fill the ball's lattice sites nearest the tip.
+//  * Particle shifting (Lind et al. 2012, J Comput Phys 231:1499, Eqs. 9, 13): dr_s = -D grad C_i,
+//    D = A h |u_i| dt (A = 2), grad C_i = sum_j V_j (1 + 0.2 (W_ij / W(d))^4) grad W_ij, with closed voxels
+//    counted as occupied (no pull toward walls) and, for a particle with open space in its support, the
+//    component normal to the free surface removed (Lind's free-surface rule); at most 0.1 d a step; never
+//    into a closed voxel.
+//  * Time step: the fastest particle moves 0.2 d (and at most the driver's dtMax).
+// Published designs read for this: SPlisHSPlasH's DFSPH step (Bender & Koschier 2017), PySPH's ISPH/IISPH
+// (Ihmsen et al. 2014), SPHinXsys's free-surface indicator (Zhang et al.), porous-media ISPH (Shao 2010).
+#include "cementsph/scene/InjectionModel.h"
+
+#include "cementsph/sph/HagenPoiseuille.h"
+#include "cementsph/sph/Simulation.h"
+
+#include <Eigen/Dense>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cementsph::scene {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kHOverD = 1.5;          // smoothing length / lattice spacing
+constexpr double kRelaxSteps = 4.0;      // density-invariant relaxation time / dt
+constexpr double kMaxMoveOverD = 0.2;    // largest advective move per step
+constexpr double kShiftA = 2.0;          // Lind et al. 2012: D = A h |u| dt
+constexpr double kMaxShiftOverD = 0.1;   // largest shift per step
+constexpr double kCannulaWallM = 0.33e-3; // 11G regular wall (as the voxel model)
+
+// Wendland C2 in 3D, support 2h: W = 21/(16 pi h^3) (1 - q/2)^4 (2q + 1); F/r = -W'(r)/r = 105/(16 pi h^5) (1 - q/2)^3.
+struct Kernel {
+  double h = 1, support = 2, wNorm = 0, fNorm = 0;
+  explicit Kernel(double hh) : h(hh), support(2 * hh), wNorm(21.0 / (16 * kPi * hh * hh * hh)),
+                               fNorm(105.0 / (16 * kPi * std::pow(hh, 5))) {}
+  double w(double r) const {
+    const double q = r / h;
+    if (q >= 2) return 0;
+    const double t = 1 - 0.5 * q;
+    return wNorm * t * t * t * t * (2 * q + 1);
+  }
+  double fOverR(double r) const { // -dW/dr / r
+    const double q = r / h;
+    if (q >= 2) return 0;
+    const double t = 1 - 0.5 * q;
+    return fNorm * t * t * t;
+  }
+};
+
+// The source profile w(r) = (1 - (r/a)^2)^2 and the effective radius of its mean pressure (header).
+double sourceWeight(double r, double a) {
+  if (r >= a) return 0;
+  const double s = 1 - (r / a) * (r / a);
+  return s * s;
+}
+double effectiveOutletRadius(double a) {
+  const int n = 20000;
+  std::vector<double> enclosed(n + 1, 0.0);
+  for (int k = 1; k <= n; ++k) {
+    const double r0 = a * (k - 1) / n, r1 = a * k / n, rm = 0.5 * (r0 + r1);
+    enclosed[k] = enclosed[k - 1] + sourceWeight(rm, a) * rm * rm * (r1 - r0);
+  }
+  double integral = 0;
+  for (int k = 1; k <= n; ++k) {
+    const double rm = a * (k - 0.5) / n, f = 0.5 * (enclosed[k] + enclosed[k - 1]) / enclosed[n];
+    integral += f * f / (rm * rm) * (a / n);
+  }
+  return 1.0 / (1.0 / a + integral);
+}
+
+class ParticleDarcyInjectionModel final : public InjectionModel {
+public:
+  void start(const InjectionSetup& in) override {
+    const SceneConfig& scene = *in.scene;
+    if (in.continuum)
+      throw std::invalid_argument("scene: bone_model \"continuum\" needs pressure_model \"voxel-darcy\" (particle-darcy "
+                                  "runs on pore-resolved CTs)");
+    if (scene.hasSecondTip())
+      throw std::invalid_argument("scene: second_tip_withdrawal_mm needs pressure_model \"voxel-darcy\" (particle-darcy "
+                                  "has one outlet)");
+    if (scene.viscosityLaw != "newtonian" || scene.curing().kind() != "none")
+      throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw +
+                                  "\" and curing need pressure_model \"voxel-darcy\" (particle-darcy is Newtonian)");
+    scene_ = &scene;
+    solid_ = in.solid;
+    rho0_ = in.model.restDensity;
+    tip_ = *scene.tipMm * 1e-3;
+    axis_ = scene.direction.normalized();
+    flowRate_ = scene.flowRateM3PerS();
+    innerDiameter_ = scene.cannulaInnerDiameterMm * 1e-3;
+    cannulaLength_ = scene.cannulaLengthMm * 1e-3;
+    d_ = scene.spacingM();
+    volume_ = d_ * d_ * d_; // phi = 1 in a pore voxel
+    kernel_ = Kernel(kHOverD * d_);
+    const double hPreset = in.model.smoothingLength;
+    poreK_ = scene.porePermeabilityM2.value_or(std::pow(hPreset, 5) / (in.model.dragCoefficient * d_ * d_ * d_));
+    if (!(poreK_ >= 1e-18 && poreK_ <= 1e-3))
+      throw std::invalid_argument("scene: the pore permeability k0 = h^5 / (Cf d^3) = " + std::to_string(poreK_) +
+                                  " m^2 is outside 1e-18 .. 1e-3 m^2 (give pore_permeability_m2)");
+    viscosity_ = scene.viscositySchedule();
+    const sph::VoxelGrid& g = solid_->grid;
+    closed_.assign(g.count(), 0);
+    for (std::size_t c = 0; c < g.count(); ++c) closed_[c] = solid_->solid[c];
+    closeShaft();
+    sourceRadius_ = std::max(0.5 * innerDiameter_, d_);
+    effectiveRadius_ = effectiveOutletRadius(sourceRadius_);
+    if (closedAt(tip_)) throw std::invalid_argument("scene: tip_mm lies in a closed voxel");
+    // The outlet ball's lattice sites (filled first, nearest the tip first) and gap candidates (d/2 lattice).
+    const int n = int(std::ceil(sourceRadius_ / d_));
+    for (int i = -n; i <= n; ++i)
+      for (int j = -n; j <= n; ++j)
+        for (int k = -n; k <= n; ++k) {
+          const Eigen::Vector3d p = tip_ + d_ * Eigen::Vector3d(i, j, k);
+          if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p)) seeds_.push_back(p);
+        }
+    std::stable_sort(seeds_.begin(), seeds_.end(), [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return (a - tip_).squaredNorm() < (b - tip_).squaredNorm();
+    });
+    for (int i = -2 * n; i <= 2 * n; ++i)
+      for (int j = -2 * n; j <= 2 * n; ++j)
+        for (int k = -2 * n; k <= 2 * n; ++k) {
+          const Eigen::Vector3d p = tip_ + 0.5 * d_ * Eigen::Vector3d(i, j, k);
+          if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p)) candidates_.push_back(p);
+        }
+    if (seeds_.empty()) throw std::invalid_argument("scene: the outlet ball holds no open lattice site");
+    {
+      const int m = int(std::ceil(kernel_.support / d_));
+      latticeNumber_ = 0;
+      for (int i = -m; i <= m; ++i)
+        for (int j = -m; j <= m; ++j)
+          for (int k = -m; k <= m; ++k) latticeNumber_ += kernel_.w(d_ * std::sqrt(double(i * i + j * j + k * k)));
+    }
+    // The region's cell list (cells of the kernel support).
+    lower_ = solid_->lowerM;
+    for (int a = 0; a < 3; ++a)
+      cells_[a] = std::max(1, int(std::ceil((solid_->upperM[a] - lower_[a]) / kernel_.support)));
+  }
+
+  double time() const override { return time_; }
+
+  void advance(double dtMax) override {
+    const double mu = viscosity_->at(time_);
+    mobility_ = poreK_ / mu;
+    if (x_.size() < seeds_.size()) { // the outlet ball fills first: no motion
+      const double dt = std::min(dtMax, std::max((double(seeds_.size()) * volume_ - injected()) / flowRate_, 1e-12 * dtMax));
+      time_ += dt;
+      ++steps_;
+      while (x_.size() < seeds_.size() && double(x_.size() + 1) * volume_ <= injected() * (1 + 1e-12)) add(seeds_[x_.size()], 0.0);
+      solveIfAny();
+      outlet_ = {time_, outletPressure(), cannulaDrop(mu)};
+      return;
+    }
+    geometry();
+    solvePressure();
+    outlet_ = {time_, outletPressure(), cannulaDrop(mu)};
+    velocities();
+    double vmax = 0;
+    for (const auto& v : u_) vmax = std::max(vmax, v.norm());
+    double dt = dtMax;
+    if (vmax > 0) dt = std::min(dt, kMaxMoveOverD * d_ / vmax);
+    move(dt);
+    lastDt_ = dt;
+    time_ += dt;
+    ++steps_;
+    insert();
+  }
+
+  TipRecord outlet() const override { return outlet_; }
+  double injectedVolumeM3() const override { return injected(); }
+  double cementVolumeM3() const override { return double(x_.size()) * volume_; }
+
+  std::string state() const override {
+    return std::to_string(x_.size()) + " particles, " + std::to_string(steps_) + " steps";
+  }
+
+  std::vector<double> cementDensity() const override {
+    const sph::VoxelGrid& g = solid_->grid;
+    std::vector<double> rho(g.count(), 0.0);
+    const double perVoxel = rho0_ * volume_ / g.voxelVolume();
+    for (const auto& p : x_) {
+      const long c = voxel(p);
+      if (c >= 0) rho[std::size_t(c)] += perVoxel;
+    }
+    return rho;
+  }
+
+  vtkSmartPointer<vtkPolyData> cement() const override {
+    const vtkIdType n = vtkIdType(x_.size());
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    points->SetDataTypeToDouble();
+    points->SetNumberOfPoints(n);
+    auto make = [n](const char* name, int components) {
+      auto a = vtkSmartPointer<vtkDoubleArray>::New();
+      a->SetName(name);
+      a->SetNumberOfComponents(components);
+      a->SetNumberOfTuples(n);
+      return a;
+    };
+    auto pressure = make("pressure_pa", 1), velocity = make("velocity_m_per_s", 3), volume = make("cement_volume_mm3", 1),
+         age = make("age_s", 1), density = make("density_kg_per_m3", 1);
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    for (vtkIdType i = 0; i < n; ++i) {
+      const std::size_t k = std::size_t(i);
+      points->SetPoint(i, x_[k].x() * 1e3, x_[k].y() * 1e3, x_[k].z() * 1e3);
+      pressure->SetTuple1(i, k < p_.size() ? p_[k] : 0.0);
+      const Eigen::Vector3d v = k < u_.size() ? u_[k] : Eigen::Vector3d::Zero();
+      velocity->SetTuple3(i, v.x(), v.y(), v.z());
+      volume->SetTuple1(i, volume_ * 1e9);
+      age->SetTuple1(i, time_ - birth_[k]);
+      density->SetTuple1(i, rho0_);
+      verts->InsertNextCell(1, &i);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetVerts(verts);
+    for (auto* a : {pressure.Get(), velocity.Get(), volume.Get(), age.Get(), density.Get()}) poly->GetPointData()->AddArray(a);
+    return poly;
+  }
+
+  void report(InjectionSummary& s, nlohmann::json& e) const override {
+    double spread = 0;
+    std::size_t inSolid = 0;
+    for (const auto& p : x_) {
+      spread += (p - tip_).norm();
+      const long c = voxel(p);
+      if (c < 0 || solid_->solid[std::size_t(c)]) ++inSolid;
+    }
+    if (!x_.empty()) spread /= double(x_.size());
+    s.steps = steps_;
+    s.particles = ParticleCounts{x_.size(), 0, 0, 0};
+    s.solidVoxelsKept = solid_->solidVoxels;
+    s.resistance = scene_->porePermeabilityM2 ? "pore-permeability (scene)" : "pore-permeability (preset drag k0)";
+    s.viscosityLaw = "newtonian";
+    s.pressureIsPhysical = true;
+    s.meanSpreadingDistanceMm = spread * 1e3;
+    s.massBalanceError = injected() > 0 ? (injected() - cementVolumeM3()) / injected() : 0.0;
+    s.fluidInSolidFraction = x_.empty() ? 0.0 : double(inSolid) / double(x_.size());
+    s.finalViscosityPaS = viscosity_->at(time_);
+    s.leakageAssessed = false;
+    addPressureSolverFigures(e, solves_, iterations_, worstResidual_, unconverged_, solveSeconds_);
+    e["pore_permeability_m2"] = poreK_;
+    e["outlet_source_radius_mm"] = sourceRadius_ * 1e3;
+    e["outlet_effective_radius_mm"] = effectiveRadius_ * 1e3;
+    e["particle_spacing_mm"] = d_ * 1e3;
+    e["smoothing_length_mm"] = kernel_.h * 1e3;
+    e["particle_volume_mm3"] = volume_ * 1e9;
+    e["front_particles"] = frontParticles_;
+    e["geometry_wall_s"] = geometrySeconds_;
+    e["cannula_shaft_voxels_closed"] = shaftVoxels_;
+  }
+
+private:
+  double injected() const { return flowRate_ * time_; }
+
+  // ROI voxel index holding p, or -1 outside the region.
+  long voxel(const Eigen::Vector3d& p) const {
+    const sph::VoxelGrid& g = solid_->grid;
+    long idx[3];
+    for (int a = 0; a < 3; ++a) {
+      const double u = (p[a] - g.origin[a]) / g.spacing[a];
+      const long i = long(std::floor(u + 0.5));
+      if (i < 0 || i >= g.size[a]) return -1;
+      idx[a] = i;
+    }
+    return long(g.index(int(idx[0]), int(idx[1]), int(idx[2])));
+  }
+  bool closedAt(const Eigen::Vector3d& p) const {
+    const long c = voxel(p);
+    return c < 0 || closed_[std::size_t(c)];
+  }
+
+  // The cannula's shaft behind the outlet is closed (as the voxel model's closeShaft).
+  void closeShaft() {
+    if (!scene_->cannulaWall) return;
+    const sph::VoxelGrid& g = solid_->grid;
+    const double outer = 0.5 * innerDiameter_ + kCannulaWallM, behind = 0.5 * g.spacing.maxCoeff();
+    for (int k = 0; k < g.size[2]; ++k)
+      for (int j = 0; j < g.size[1]; ++j)
+        for (int i = 0; i < g.size[0]; ++i) {
+          const Eigen::Vector3d r = g.centre(i, j, k) - tip_;
+          const double s = r.dot(axis_);
+          const std::size_t c = g.index(i, j, k);
+          if (s < -behind && s >= -cannulaLength_ && (r - s * axis_).norm() <= outer && !closed_[c]) {
+            closed_[c] = 1;
+            ++shaftVoxels_;
+          }
+        }
+  }
+
+  void add(const Eigen::Vector3d& p, double pressure) {
+    x_.push_back(p);
+    p_.push_back(pressure);
+    u_.push_back(Eigen::Vector3d::Zero());
+    birth_.push_back(time_);
+  }
+
+  // The cell list, neighbour pairs (i < j) with F/r, and each particle's ghost and closed-voxel sums.
+  void geometry() {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::size_t n = x_.size();
+    const double cs = kernel_.support, s2 = cs * cs;
+    // Cells.
+    const std::size_t nc = std::size_t(cells_[0]) * cells_[1] * cells_[2];
+    std::vector<int> cellOf(n);
+    cellStart_.assign(nc + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      int c[3];
+      for (int a = 0; a < 3; ++a) c[a] = std::clamp(int(std::floor((x_[i][a] - lower_[a]) / cs)), 0, cells_[a] - 1);
+      cellOf[i] = c[0] + cells_[0] * (c[1] + cells_[1] * c[2]);
+      ++cellStart_[std::size_t(cellOf[i]) + 1];
+    }
+    for (std::size_t c = 0; c < nc; ++c) cellStart_[c + 1] += cellStart_[c];
+    cellItems_.assign(n, 0);
+    {
+      std::vector<int> fillPos(cellStart_.begin(), cellStart_.end() - 1);
+      for (std::size_t i = 0; i < n; ++i) cellItems_[std::size_t(fillPos[std::size_t(cellOf[i])]++)] = int(i);
+    }
+    // Pairs.
+    pairI_.clear(), pairJ_.clear(), pairF_.clear(), pairW_.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const int ci = cellOf[i];
+      const int cx = ci % cells_[0], cy = (ci / cells_[0]) % cells_[1], cz = ci / (cells_[0] * cells_[1]);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int x = cx + dx, y = cy + dy, z = cz + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= cells_[0] || y >= cells_[1] || z >= cells_[2]) continue;
+            const std::size_t c = std::size_t(x + cells_[0] * (y + cells_[1] * z));
+            for (int q = cellStart_[c]; q < cellStart_[c + 1]; ++q) {
+              const std::size_t j = std::size_t(cellItems_[std::size_t(q)]);
+              if (j <= i) continue;
+              const double r2 = (x_[j] - x_[i]).squaredNorm();
+              if (r2 >= s2) continue;
+              pairI_.push_back(int(i)), pairJ_.push_back(int(j));
+              const double r = std::sqrt(r2);
+              pairF_.push_back(kernel_.fOverR(r));
+              pairW_.push_back(kernel_.w(r));
+            }
+          }
+    }
+    // Occupancy of the pore voxels: the colour function C(x) = sum_j d^3 W(x - x_j) >= 1/2 (the cement's
+    // surface at the level 1/2 lies half a spacing beyond the last particles of a lattice), or the outlet ball.
+    const sph::VoxelGrid& g = solid_->grid;
+    occupied_.assign(g.count(), 0);
+    colour_.assign(g.count(), 0.0f);
+    for (const auto& p : x_) {
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, int(std::ceil((p[a] - cs - g.origin[a]) / g.spacing[a])));
+        hi[a] = std::min(g.size[a] - 1, int(std::floor((p[a] + cs - g.origin[a]) / g.spacing[a])));
+      }
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i)
+            colour_[g.index(i, j, k)] += float(volume_ * kernel_.w((g.centre(i, j, k) - p).norm()));
+    }
+    for (std::size_t c = 0; c < g.count(); ++c) occupied_[c] = colour_[c] >= 0.5f;
+    auto stamp = [&](const Eigen::Vector3d& p, double radius) {
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, int(std::ceil((p[a] - radius - g.origin[a]) / g.spacing[a])));
+        hi[a] = std::min(g.size[a] - 1, int(std::floor((p[a] + radius - g.origin[a]) / g.spacing[a])));
+      }
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i)
+            if ((g.centre(i, j, k) - p).squaredNorm() <= radius * radius) occupied_[g.index(i, j, k)] = 1;
+    };
+    stamp(tip_, sourceRadius_);
+    // Per particle: the ghost (open, empty) voxels' Laplacian weight, gradient sums, shift sums.
+    ghostF_.assign(n, 0.0);
+    ghostB_.assign(n, Eigen::Matrix3d::Zero());
+    ghostNormal_.assign(n, Eigen::Vector3d::Zero());
+    closedGradC_.assign(n, Eigen::Vector3d::Zero());
+    std::vector<double> number(n, kernel_.w(0.0));
+    for (std::size_t q = 0; q < pairI_.size(); ++q) number[std::size_t(pairI_[q])] += pairW_[q], number[std::size_t(pairJ_[q])] += pairW_[q];
+    const double vc = g.voxelVolume();
+    frontParticles_ = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d& p = x_[i];
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = int(std::ceil((p[a] - cs - g.origin[a]) / g.spacing[a]));
+        hi[a] = int(std::floor((p[a] + cs - g.origin[a]) / g.spacing[a]));
+      }
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int ii = lo[0]; ii <= hi[0]; ++ii) {
+            const Eigen::Vector3d c = g.origin + g.spacing.cwiseProduct(Eigen::Vector3d(ii, j, k));
+            const Eigen::Vector3d r = c - p;
+            const double rn = r.norm();
+            if (rn >= cs || rn == 0) continue;
+            const bool inside = ii >= 0 && j >= 0 && k >= 0 && ii < g.size[0] && j < g.size[1] && k < g.size[2];
+            const std::size_t v = inside ? g.index(ii, j, k) : 0;
+            const double f = kernel_.fOverR(rn);
+            if (!inside || closed_[v]) {
+              closedGradC_[i] += vc * f * r; // grad_i W toward the closed voxel: counted as occupied
+              number[i] += vc / volume_ * kernel_.w(rn);
+            } else if (!occupied_[v]) {
+              number[i] += vc / volume_ * kernel_.w(rn);
+              ghostF_[i] += vc * f;
+              ghostB_[i] += vc * f * r * r.transpose();
+              ghostNormal_[i] += vc * f * r;
+            }
+          }
+      if (ghostF_[i] > 0) ++frontParticles_;
+    }
+    // Each particle's space volume from its number density completed by the closed and open space about it
+    // (a lattice of spacing d: exactly d^3).
+    omega_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) omega_[i] = volume_ * latticeNumber_ / number[i];
+    geometrySeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  void solveIfAny() {
+    if (x_.empty()) return;
+    geometry();
+    solvePressure();
+  }
+
+  // Row i times Omega_i / M: sum_j 2 Omega_i Omega_j F/r (p_i - p_j) + g_i p_i = [Q_i + (d^3 - Omega_i) / tau] / M,
+  // the density-invariant term (Shao & Lo 2003, Adv Water Resour 26:787; Hu & Adams 2007) relaxing each
+  // particle's space volume to d^3 over tau = kRelaxSteps steps.
+  void solvePressure() {
+    const std::size_t n = x_.size();
+    const double M = mobility_;
+    // The matrix as its pair weights and diagonal: y = A x is one pass over the pairs (matrix-free).
+    pairA_.resize(pairI_.size());
+    diagA_.assign(n, 0.0);
+    const double scale = 1.0 / volume_; // entries ~ 1 / d^2
+    for (std::size_t q = 0; q < pairI_.size(); ++q) {
+      const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
+      pairA_[q] = 2 * omega_[i] * omega_[j] * pairF_[q] * scale;
+      diagA_[i] += pairA_[q], diagA_[j] += pairA_[q];
+    }
+    for (std::size_t i = 0; i < n; ++i) diagA_[i] += 2 * omega_[i] * ghostF_[i] * scale;
+    const Eigen::Index rows = Eigen::Index(n);
+    weights_.assign(n, 0.0);
+    double sum = 0;
+    for (std::size_t i = 0; i < n; ++i) sum += weights_[i] = sourceWeight((x_[i] - tip_).norm(), sourceRadius_);
+    const double tau = kRelaxSteps * lastDt_;
+    Eigen::VectorXd b(rows), x(rows);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double qi = sum > 0 ? flowRate_ * weights_[i] / sum : 0.0;
+      const double relax = tau > 0 ? (volume_ - omega_[i]) / tau : 0.0;
+      b[Eigen::Index(i)] = (qi + relax) * scale / M;
+      x[Eigen::Index(i)] = p_[i];
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const Cg r = conjugateGradient(b, x, 1e-9, 20000);
+    solveSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++solves_;
+    iterations_ += std::size_t(r.iterations);
+    worstResidual_ = std::max(worstResidual_, r.residual);
+    if (r.residual > 1e-9) ++unconverged_;
+    for (std::size_t i = 0; i < n; ++i) p_[i] = x[Eigen::Index(i)];
+  }
+
+  // Jacobi-preconditioned conjugate gradient on the matrix-free A (single-threaded and deterministic); stops
+  // at |b - A x| <= tolerance |b| (as Eigen's ConjugateGradient).
+  struct Cg {
+    int iterations = 0;
+    double residual = 0;
+  };
+  void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+    y = Eigen::Map<const Eigen::VectorXd>(diagA_.data(), x.size()).cwiseProduct(x);
+    for (std::size_t q = 0; q < pairA_.size(); ++q) {
+      const Eigen::Index i = pairI_[q], j = pairJ_[q];
+      y[i] -= pairA_[q] * x[j];
+      y[j] -= pairA_[q] * x[i];
+    }
+  }
+  Cg conjugateGradient(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int maxIterations) const {
+    const double bn = b.norm();
+    if (bn == 0) {
+      x.setZero();
+      return {};
+    }
+    const Eigen::VectorXd inv = Eigen::Map<const Eigen::VectorXd>(diagA_.data(), b.size()).cwiseInverse();
+    Eigen::VectorXd r(b.size()), z, p, q(b.size());
+    multiply(x, q);
+    r = b - q;
+    z = inv.cwiseProduct(r);
+    p = z;
+    double rz = r.dot(z);
+    Cg out;
+    while (out.iterations < maxIterations && r.norm() > tolerance * bn) {
+      multiply(p, q);
+      const double alpha = rz / p.dot(q);
+      x += alpha * p;
+      r -= alpha * q;
+      z = inv.cwiseProduct(r);
+      const double rz1 = r.dot(z);
+      p = z + (rz1 / rz) * p;
+      rz = rz1;
+      ++out.iterations;
+    }
+    out.residual = r.norm() / bn;
+    return out;
+  }
+
+  // Corrected gradient of p and the Darcy velocity (phi = 1: interstitial = superficial).
+  void velocities() {
+    const std::size_t n = x_.size();
+    std::vector<Eigen::Matrix3d> B(n);
+    std::vector<Eigen::Vector3d> s(n, Eigen::Vector3d::Zero());
+    for (std::size_t i = 0; i < n; ++i) {
+      B[i] = ghostB_[i];
+      s[i] = -p_[i] * ghostNormal_[i]; // ghosts at p = 0: (0 - p_i)(x_c - x_i) V_c F/r
+    }
+    for (std::size_t q = 0; q < pairI_.size(); ++q) {
+      const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
+      const Eigen::Vector3d r = x_[j] - x_[i];
+      const double wj = omega_[j] * pairF_[q], wi = omega_[i] * pairF_[q];
+      const Eigen::Matrix3d rr = r * r.transpose();
+      B[i] += wj * rr, B[j] += wi * rr;
+      s[i] += wj * (p_[j] - p_[i]) * r;
+      s[j] += wi * (p_[j] - p_[i]) * r; // (p_i - p_j)(x_i - x_j)
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d grad;
+      const double tr = B[i].trace();
+      Eigen::LDLT<Eigen::Matrix3d> ldlt(B[i]);
+      const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(B[i], Eigen::EigenvaluesOnly).eigenvalues();
+      if (tr > 0 && ev.minCoeff() > 0.05 * tr) grad = ldlt.solve(s[i]);
+      else grad = tr > 0 ? Eigen::Vector3d(3.0 * s[i] / tr) : Eigen::Vector3d::Zero();
+      u_[i] = -mobility_ * grad;
+    }
+  }
+
+  // Advection, Lind's shifting, and the no-penetration rule.
+  void move(double dt) {
+    const std::size_t n = x_.size();
+    const double wd = kernel_.w(d_);
+    std::vector<Eigen::Vector3d> gradC(n);
+    for (std::size_t i = 0; i < n; ++i) gradC[i] = closedGradC_[i];
+    for (std::size_t q = 0; q < pairI_.size(); ++q) {
+      const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
+      const Eigen::Vector3d r = x_[j] - x_[i];
+      const double ratio = kernel_.w(r.norm()) / wd;
+      const double w = pairF_[q] * (1 + 0.2 * ratio * ratio * ratio * ratio);
+      gradC[i] += omega_[j] * w * r, gradC[j] -= omega_[i] * w * r;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d shift = -kShiftA * kernel_.h * u_[i].norm() * dt * gradC[i];
+      if (ghostF_[i] > 0 && ghostNormal_[i].norm() > 0) {
+        const Eigen::Vector3d nrm = ghostNormal_[i].normalized();
+        shift -= shift.dot(nrm) * nrm;
+      }
+      const double sn = shift.norm();
+      if (sn > kMaxShiftOverD * d_) shift *= kMaxShiftOverD * d_ / sn;
+      const Eigen::Vector3d step = u_[i] * dt + shift;
+      Eigen::Vector3d pos = x_[i];
+      for (int a = 0; a < 3; ++a) {
+        Eigen::Vector3d trial = pos;
+        trial[a] += step[a];
+        if (!closedAt(trial)) pos = trial;
+      }
+      x_[i] = pos;
+    }
+  }
+
+  // The emitted volume not yet in particles goes into the outlet ball's largest gaps.
+  void insert() {
+    std::size_t due = 0;
+    while (double(x_.size() + due + 1) * volume_ <= injected() * (1 + 1e-12)) ++due;
+    if (due == 0) return;
+    const double reach = sourceRadius_ + d_;
+    std::vector<std::size_t> near;
+    for (std::size_t i = 0; i < x_.size(); ++i)
+      if ((x_[i] - tip_).norm() <= reach) near.push_back(i);
+    std::vector<double> gap(candidates_.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      for (std::size_t i : near) gap[c] = std::min(gap[c], (x_[i] - candidates_[c]).squaredNorm());
+    double pNew = 0; // warm start for the new particles: the outlet pressure
+    pNew = outlet_.tipPa;
+    for (std::size_t k = 0; k < due; ++k) {
+      const std::size_t best = std::size_t(std::max_element(gap.begin(), gap.end()) - gap.begin());
+      const Eigen::Vector3d p = candidates_[best];
+      add(p, pNew);
+      for (std::size_t c = 0; c < candidates_.size(); ++c) gap[c] = std::min(gap[c], (p - candidates_[c]).squaredNorm());
+    }
+  }
+
+  double outletPressure() const {
+    double sum = 0, weight = 0;
+    for (std::size_t i = 0; i < x_.size() && i < p_.size(); ++i) {
+      const double w = sourceWeight((x_[i] - tip_).norm(), sourceRadius_);
+      sum += w * p_[i], weight += w;
+    }
+    return weight > 0 ? sum / weight : 0.0;
+  }
+
+  double cannulaDrop(double mu) const {
+    return sph::hagenPoiseuillePressureDrop(mu, cannulaLength_, flowRate_, innerDiameter_);
+  }
+
+  const SceneConfig* scene_ = nullptr;
+  const PorousSolid* solid_ = nullptr;
+  double rho0_ = 0, flowRate_ = 0, innerDiameter_ = 0, cannulaLength_ = 0, d_ = 0, volume_ = 0, poreK_ = 0;
+  double sourceRadius_ = 0, effectiveRadius_ = 0, mobility_ = 0, time_ = 0, latticeNumber_ = 0, lastDt_ = 0;
+  Kernel kernel_{1.0};
+  Eigen::Vector3d tip_, axis_, lower_;
+  std::optional<sph::ViscositySchedule> viscosity_;
+  std::vector<std::uint8_t> closed_, occupied_;
+  std::vector<float> colour_;
+  std::size_t shaftVoxels_ = 0, steps_ = 0, frontParticles_ = 0;
+  std::vector<Eigen::Vector3d> seeds_, candidates_;
+  int cells_[3] = {1, 1, 1};
+  std::vector<int> cellStart_, cellItems_;
+  // Particles.
+  std::vector<Eigen::Vector3d> x_, u_;
+  std::vector<double> p_, birth_, weights_;
+  // Geometry of the step.
+  std::vector<int> pairI_, pairJ_;
+  std::vector<double> pairF_, pairW_, ghostF_, omega_, pairA_, diagA_;
+  std::vector<Eigen::Matrix3d> ghostB_;
+  std::vector<Eigen::Vector3d> ghostNormal_, closedGradC_;
+  // Solver figures.
+  std::size_t solves_ = 0, iterations_ = 0, unconverged_ = 0;
+  double worstResidual_ = 0, solveSeconds_ = 0, geometrySeconds_ = 0;
+  TipRecord outlet_{0, 0, 0};
+};
+
+} // namespace
+
+std::unique_ptr<InjectionModel> makeParticleDarcyInjectionModel() { return std::make_unique<ParticleDarcyInjectionModel>(); }
+
+} // namespace cementsph::scene

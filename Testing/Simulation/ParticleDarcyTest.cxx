@@ -1,0 +1,195 @@
+// The incompressible SPH for creeping Darcy flow (pressure_model "particle-darcy",
+// src/Models/ParticleDarcy) through runInjection, against the issue 19 oracles:
+//  * a uniform open medium (every voxel a pore, no shaft: cannula_wall false): the cement's mean distance
+//    from the tip 3R/4 within 2 % (R from V = 4/3 pi R^3, phi = 1); the tip pressure
+//    mu Q / (4 pi k)(1/r0 - 1/R) within 10 %, r0 the outlet profile's effective radius computed here
+//    independently (1/r0 = 1/a + int_0^a f^2 / r^2 dr for the source weight (1 - (r/a)^2)^2, a = 1.194 mm);
+//    the volume within 1 % at every snapshot; the step-to-step tip-pressure change (median) below 5 %;
+//  * p(400) / p(100) = 4.00 within 1 % (creeping Darcy flow: p is proportional to mu);
+//  * a scaffold CT (ScaffoldCT.h): cement in solid below 0.5 % of its volume.
+#include "cementsph/scene/InjectionRunner.h"
+#include "ScaffoldCT.h"
+
+#include <gtest/gtest.h>
+#include <itkImageRegionConstIteratorWithIndex.h>
+#include <vtkPointData.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <vector>
+
+using namespace cementsph;
+using namespace cementsph::scene;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+imaging::ImageType::Pointer uniform(int n, double spacingMm) {
+  auto img = imaging::ImageType::New();
+  imaging::ImageType::RegionType region;
+  imaging::ImageType::SizeType size;
+  size.Fill(itk::SizeValueType(n));
+  region.SetSize(size);
+  img->SetRegions(region);
+  img->SetSpacing(spacingMm);
+  img->Allocate();
+  img->FillBuffer(-100.f);
+  return img;
+}
+
+// 1/r0 = 1/a + int_0^a f(r)^2 / r^2 dr, f the enclosed share of a source of density (1 - (r/a)^2)^2:
+// f(r) = P(r/a) / P(1) with P(x) = x^3/3 - 2 x^5/5 + x^7/7 (closed form of int_0^x (1 - s^2)^2 s^2 ds).
+double effectiveRadius(double a) {
+  auto P = [](double x) { return x * x * x / 3 - 2 * std::pow(x, 5) / 5 + std::pow(x, 7) / 7; };
+  const int n = 4000; // Simpson on [0, 1] in x = r / a; the integrand f^2 / x^2 ~ x^4 near 0
+  double s = 0;
+  for (int k = 0; k <= n; ++k) {
+    const double x = double(k) / n, f = P(x) / P(1.0), g = x > 0 ? f * f / (x * x) : 0.0;
+    s += g * (k == 0 || k == n ? 1 : (k % 2 ? 4 : 2));
+  }
+  s *= 1.0 / (3 * n);
+  return a / (1 + s);
+}
+
+struct Outcome {
+  InjectionRunResult result;
+  double wallS;
+};
+
+Outcome run(const imaging::ImageType* ct, nlohmann::json j, const std::string& model = "particle-darcy") {
+  SceneConfig scene = sceneFromJson(j);
+  scene.pressureModel = model;
+  const auto t0 = std::chrono::steady_clock::now();
+  Outcome r{runInjection(ct, scene, {}), 0};
+  r.wallS = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+double medianRelativeChange(const std::vector<TipRecord>& s, double fromTime) {
+  std::vector<double> c;
+  for (std::size_t k = 1; k < s.size(); ++k)
+    if (s[k - 1].time >= fromTime && s[k - 1].tipPa > 0) c.push_back(std::abs(s[k].tipPa / s[k - 1].tipPa - 1));
+  if (c.empty()) return 1.0;
+  std::nth_element(c.begin(), c.begin() + std::ptrdiff_t(c.size() / 2), c.end());
+  return c[c.size() / 2];
+}
+
+nlohmann::json uniformScene(double mu) {
+  return {{"tip_mm", {6, 6, 6}}, {"volume_ml", 0.1}, {"viscosity_pa_s", mu}, {"particle_radius_mm", 0.15},
+          {"cannula_wall", false}, {"pore_permeability_m2", 1e-9}, {"snapshot_interval_s", 0.1}};
+}
+} // namespace
+
+TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
+  const auto ct = uniform(40, 0.3);
+  const Outcome r = run(ct, uniformScene(100.0));
+  const nlohmann::json& m = r.result.metrics;
+  const double V = 0.1e-6, R = std::cbrt(3 * V / (4 * kPi)), mu = 100, Q = 0.05e-6, k = 1e-9;
+  const double a = 0.5 * 2.388e-3, r0 = effectiveRadius(a);
+  const double tip = mu * Q / (4 * kPi * k) * (1 / r0 - 1 / R);
+  const double noise = medianRelativeChange(r.result.tipSeries, 0.25 * V / Q);
+  std::printf("uniform: spreading %.4f mm against 3R/4 %.4f mm; tip %.1f Pa against %.1f Pa (r0 %.4f mm, engine %.4f); "
+              "noise %.4f; %zu steps, wall %.1f s, particles %s\n",
+              m["mean_spreading_distance_mm"].get<double>(), 0.75 * R * 1e3, m["final_tip_pressure_pa"].get<double>(), tip,
+              r0 * 1e3, m["outlet_effective_radius_mm"].get<double>(), noise, std::size_t(m["steps"]), r.wallS,
+              m["particles"].dump().c_str());
+  std::printf("solver: %s iterations mean, worst residual %s, solve %s s, geometry %s s, front %s\n",
+              m["pressure_solver_iterations_mean"].dump().c_str(), m["pressure_solver_worst_residual"].dump().c_str(),
+              m["pressure_solve_wall_s"].dump().c_str(), m["geometry_wall_s"].dump().c_str(), m["front_particles"].dump().c_str());
+  {
+    auto* pts = r.result.particles.GetPointer();
+    auto* pa = pts->GetPointData()->GetArray("pressure_pa");
+    auto* va = pts->GetPointData()->GetArray("velocity_m_per_s");
+    const int nb = 16;
+    std::vector<double> cnt(nb, 0), ps(nb, 0), vr(nb, 0);
+    for (vtkIdType i = 0; i < pts->GetNumberOfPoints(); ++i) {
+      double x[3];
+      pts->GetPoint(i, x);
+      const double rx = x[0] - 6, ry = x[1] - 6, rz = x[2] - 6, rr = std::sqrt(rx * rx + ry * ry + rz * rz);
+      const int b = std::min(nb - 1, int(rr / 0.25));
+      cnt[b] += 1, ps[b] += pa->GetTuple1(i);
+      const double* v = va->GetTuple3(i);
+      vr[b] += (v[0] * rx + v[1] * ry + v[2] * rz) / std::max(rr, 1e-9);
+    }
+    for (int b = 0; b < nb; ++b) {
+      const double r1 = 0.25 * b, r2 = r1 + 0.25, shell = 4.0 / 3 * kPi * (r2 * r2 * r2 - r1 * r1 * r1), rm = (r1 + r2) / 2e3;
+      std::printf("  r %.3f density %.3f p %.0f (oracle %.0f) vr %.3g (oracle %.3g)\n", rm * 1e3, cnt[b] * 0.027 / shell,
+                  cnt[b] > 0 ? ps[b] / cnt[b] : 0.0, mu * Q / (4 * kPi * k) * (1 / rm - 1 / R), cnt[b] > 0 ? vr[b] / cnt[b] : 0.0,
+                  Q / (4 * kPi * rm * rm));
+    }
+  }
+  EXPECT_NEAR(m["mean_spreading_distance_mm"].get<double>() / (0.75 * R * 1e3), 1.0, 0.02);
+  EXPECT_NEAR(m["final_tip_pressure_pa"].get<double>() / tip, 1.0, 0.10);
+  EXPECT_LT(noise, 0.05);
+  for (const auto& h : m["volume_history"]) {
+    const double injected = h["volume_injected_ml"].get<double>(), held = h["cement_volume_ml"].get<double>();
+    EXPECT_NEAR(held, injected, 0.01 * injected) << "at " << h["time_s"] << " s";
+  }
+  EXPECT_DOUBLE_EQ(m["fluid_in_solid_fraction"].get<double>(), 0.0);
+}
+
+TEST(ParticleDarcy, PressureIsProportionalToViscosityAndTheCementIsTheSame) {
+  // Creeping Darcy flow: p ~ mu, the motion independent of mu. 0.05 ml in the uniform medium.
+  const auto ct = uniform(40, 0.3);
+  nlohmann::json a = uniformScene(100.0), b = uniformScene(400.0);
+  a["volume_ml"] = b["volume_ml"] = 0.05;
+  const Outcome low = run(ct, a), high = run(ct, b);
+  const nlohmann::json &x = low.result.metrics, &y = high.result.metrics;
+  const double ratio = y["final_tip_pressure_pa"].get<double>() / x["final_tip_pressure_pa"].get<double>();
+  std::printf("p(400) / p(100) = %.6f; spreading %.6f and %.6f mm\n", ratio, x["mean_spreading_distance_mm"].get<double>(),
+              y["mean_spreading_distance_mm"].get<double>());
+  EXPECT_NEAR(ratio, 4.0, 0.04);
+  EXPECT_NEAR(y["max_tip_pressure_pa"].get<double>() / x["max_tip_pressure_pa"].get<double>(), 4.0, 0.04);
+  // The same cement: every particle within 0.05 mm (the surfaces coincide).
+  auto* p = low.result.particles.GetPointer();
+  auto* q = high.result.particles.GetPointer();
+  ASSERT_EQ(p->GetNumberOfPoints(), q->GetNumberOfPoints());
+  double worst = 0;
+  for (vtkIdType i = 0; i < p->GetNumberOfPoints(); ++i) {
+    double u[3], v[3];
+    p->GetPoint(i, u), q->GetPoint(i, v);
+    worst = std::max(worst, std::sqrt((u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]) + (u[2] - v[2]) * (u[2] - v[2])));
+  }
+  std::printf("largest particle displacement between the two runs %.3g mm\n", worst);
+  EXPECT_LT(worst, 0.05);
+}
+
+TEST(ParticleDarcy, NoCementEntersTheScaffoldsSolidAndTheVolumeIsKept) {
+  const auto ct = cementsph::scene::testing::scaffold();
+  const nlohmann::json j{{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.1}, {"particle_radius_mm", 0.2},
+                         {"cannula_length_mm", 5}, {"pore_permeability_m2", 1e-9}, {"snapshot_interval_s", 0.5}};
+  const Outcome r = run(ct, j);
+  const nlohmann::json& m = r.result.metrics;
+  // Independently of the engine's figure: the particles' positions against the rods' voxels (0.5 mm, origin 0).
+  auto* pts = r.result.particles.GetPointer();
+  std::size_t inRod = 0;
+  for (vtkIdType i = 0; i < pts->GetNumberOfPoints(); ++i) {
+    double x[3];
+    pts->GetPoint(i, x);
+    if (cementsph::scene::testing::scaffoldRod(int(std::lround(x[0] / 0.5)), int(std::lround(x[1] / 0.5)),
+                                               int(std::lround(x[2] / 0.5))))
+      ++inRod;
+  }
+  const double share = double(inRod) / double(pts->GetNumberOfPoints());
+  std::printf("scaffold: %zu of %lld particles in solid (%.4f); engine %.4f; tip %.1f Pa, spreading %.3f mm, %zu steps, "
+              "wall %.1f s\n", inRod, (long long)pts->GetNumberOfPoints(), share, m["fluid_in_solid_fraction"].get<double>(),
+              m["final_tip_pressure_pa"].get<double>(), m["mean_spreading_distance_mm"].get<double>(), std::size_t(m["steps"]),
+              r.wallS);
+  EXPECT_LT(share, 0.005);
+  EXPECT_LT(m["fluid_in_solid_fraction"].get<double>(), 0.005);
+  // The simulated CT: the rods (1000 HU) hold no cement.
+  itk::ImageRegionConstIteratorWithIndex<imaging::ImageType> s(r.result.simulatedCt, r.result.simulatedCt->GetLargestPossibleRegion());
+  std::size_t rodsChanged = 0;
+  for (; !s.IsAtEnd(); ++s) {
+    const auto idx = s.GetIndex();
+    if (cementsph::scene::testing::scaffoldRod(int(idx[0]), int(idx[1]), int(idx[2])) && s.Get() != 1000.f) ++rodsChanged;
+  }
+  EXPECT_EQ(rodsChanged, 0u);
+  for (const auto& h : m["volume_history"]) {
+    const double injected = h["volume_injected_ml"].get<double>(), held = h["cement_volume_ml"].get<double>();
+    EXPECT_NEAR(held, injected, 0.01 * injected) << "at " << h["time_s"] << " s";
+  }
+}
