@@ -31,7 +31,7 @@ struct PlanArgs {
   std::string ct, scene, out;
   std::vector<double> entry, direction, target;
   double targetRadiusMm = 5, minDepthMm = 0, maxDepthMm = 20, minVolumeMl = 0.5, maxVolumeMl = 4;
-  double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
+  double maxSyringeMpa = 3.0, maxLeakageMl = 0.0, volumeCostPerMl = 0.01;
   int maxEvaluations = 40, starts = 3, threads = 0;
   bool quiet = false, secondTip = false;
 };
@@ -53,6 +53,10 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
   sub.add_option("--max-volume-ml", a->maxVolumeMl, "Volume budget (ml)");
   sub.add_option("--max-syringe-mpa", a->maxSyringeMpa, "Syringe pressure limit (MPa)");
   sub.add_option("--max-leakage-ml", a->maxLeakageMl, "Leakage limit (ml; 0: none allowed)");
+  sub.add_option("--volume-cost-per-ml", a->volumeCostPerMl,
+                 "Coverage (fraction of the target) one ml of cement must buy: of two plans covering the same, the "
+                 "one with less cement wins (default 0.01)")
+      ->check(CLI::Range(0.0, 1.0));
   sub.add_option("--max-evaluations", a->maxEvaluations, "Injections the optimiser may run, over all starts");
   sub.add_option("--starts", a->starts,
                  "Independent BOBYQA starts spread along the trajectory (under mpirun, one per free rank at a time)");
@@ -84,6 +88,7 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
       r.maxVolumeMl = a->maxVolumeMl;
       r.maxSyringeMpa = a->maxSyringeMpa;
       r.maxLeakageMl = a->maxLeakageMl;
+      r.volumeCostPerMl = a->volumeCostPerMl;
       r.maxEvaluations = a->maxEvaluations;
       r.starts = a->starts;
       r.secondTip = a->secondTip;

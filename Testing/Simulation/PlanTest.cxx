@@ -81,6 +81,7 @@ TEST(Plan, OnTheVertebraTheTipLandsInTheTargetWithinTheLimits) {
   ASSERT_GE(plan.at("evaluations").size(), 3u);
   for (const auto& e : plan.at("evaluations")) EXPECT_LE(e.at("objective").get<double>(), best.at("objective").get<double>());
   EXPECT_FALSE(plan.at("stop_reason").get<std::string>().empty());
+  EXPECT_NE(plan.at("why_best").get<std::string>().find("coverage"), std::string::npos); // plan.json says why
   std::ifstream csv(out / "plan.csv");
   std::size_t rows = 0;
   for (std::string line; std::getline(csv, line);) ++rows;
@@ -142,4 +143,19 @@ TEST(Plan, ASecondTipOnTheTrajectoryHoldsTheLimits) {
     for (int a = 0; a < 3; ++a)
       EXPECT_NEAR(metrics.at("second_tip_mm")[a].get<double>(), best["second_tip_mm"][a].get<double>(), 1e-9);
   }
+}
+
+// The objective values less cement at the same coverage: 92.8 % of the target with 2.98 ml beats the same
+// coverage with 6 ml by the cement's cost, 0.01 x (6 - 2.98) = 0.0302 (worked out by hand from the formula in
+// InjectionPlanner.h); a leak over the limit costs 5 per 0.1 ml over it.
+TEST(Plan, TheObjectiveValuesLessCementAtTheSameCoverage) {
+  cementsph::planning::PlanRequest r;
+  r.maxSyringeMpa = 3.0;
+  r.maxLeakageMl = 0.05;
+  const double small = cementsph::planning::planObjective(r, 0.928, 2.98, 1.0, 0.0);
+  const double large = cementsph::planning::planObjective(r, 0.928, 6.0, 1.0, 0.0);
+  EXPECT_NEAR(small - large, 0.0302, 1e-12);
+  EXPECT_NEAR(small, 0.928 - 0.0298, 1e-12);
+  EXPECT_NEAR(cementsph::planning::planObjective(r, 0.928, 2.98, 1.0, 0.15), small - 5.0, 1e-12);
+  EXPECT_NEAR(cementsph::planning::planObjective(r, 0.928, 2.98, 3.3, 0.0), small - 5.0 * 0.1, 1e-12);
 }

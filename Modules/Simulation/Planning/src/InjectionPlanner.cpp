@@ -89,10 +89,8 @@ double evaluate(unsigned, const double* x, double*, void* data) {
     e.coverage = targetCoverage(run.particles, r.targetCentreMm, r.targetRadiusMm);
     e.syringeMpa = run.summary.maxInjectionPressurePa * 1e-6;
     e.leakageMl = run.summary.leakageVolumeMl;
-    const double penalty = std::max(0.0, e.syringeMpa / r.maxSyringeMpa - 1.0) +
-                           std::max(0.0, e.leakageMl - r.maxLeakageMl) / 0.1;
-    e.withinLimits = penalty <= 0.0;
-    e.objective = e.coverage - 5.0 * penalty;
+    e.withinLimits = e.syringeMpa <= r.maxSyringeMpa && e.leakageMl <= r.maxLeakageMl;
+    e.objective = planObjective(r, e.coverage, x[1], e.syringeMpa, e.leakageMl);
   } catch (const std::exception& ex) {
     e.failure = ex.what();
     e.objective = -1.0;
@@ -243,6 +241,11 @@ PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& r,
   return result;
 }
 
+double planObjective(const PlanRequest& r, double coverage, double volumeMl, double syringeMpa, double leakageMl) {
+  const double penalty = std::max(0.0, syringeMpa / r.maxSyringeMpa - 1.0) + std::max(0.0, leakageMl - r.maxLeakageMl) / 0.1;
+  return coverage - r.volumeCostPerMl * volumeMl - 5.0 * penalty;
+}
+
 nlohmann::json PlanStart::toJson() const {
   return {{"index", index},       {"depth_mm", depthMm},         {"volume_ml", volumeMl},
           {"rank", rank},         {"stop_reason", stopReason},   {"evaluations", evaluations}};
@@ -271,7 +274,21 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
   for (const auto& e : evaluations) evaluationsJson.push_back(e.toJson());
   nlohmann::json startsJson = nlohmann::json::array();
   for (const auto& s : starts) startsJson.push_back(s.toJson());
+  // Why the best plan won: its objective's terms, against the runner-up's.
+  std::ostringstream why;
+  why << std::setprecision(4) << "highest objective " << best.objective << " = coverage " << best.coverage << " - "
+      << r.volumeCostPerMl << "/ml x " << best.volumeMl << " ml - limit penalty "
+      << best.coverage - r.volumeCostPerMl * best.volumeMl - best.objective;
+  const PlanEvaluation* second = nullptr;
+  for (const auto& e : evaluations)
+    if (e.index != best.index || e.start != best.start)
+      if (!second || e.objective > second->objective) second = &e;
+  if (second)
+    why << "; the runner-up (" << second->volumeMl << " ml at depth " << second->depthMm << " mm, coverage "
+        << second->coverage << (second->withinLimits ? "" : ", outside the limits") << ") scored " << second->objective;
   return {{"best", best.toJson()},
+          {"why_best", why.str()},
+          {"objective", "coverage - volume_cost_per_ml x volume_ml - 5 x (syringe excess / limit + leakage excess / 0.1 ml)"},
           {"evaluations", evaluationsJson},
           {"stop_reason", stopReason},
           {"optimiser", "NLopt LN_BOBYQA, " + std::to_string(starts.size()) + " starts along the trajectory"},
@@ -285,6 +302,7 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
             {"volume_range_ml", {r.minVolumeMl, r.maxVolumeMl}},
             {"max_syringe_pressure_mpa", r.maxSyringeMpa},
             {"max_leakage_ml", r.maxLeakageMl},
+            {"volume_cost_per_ml", r.volumeCostPerMl},
             {"max_evaluations", r.maxEvaluations},
             {"starts", r.starts},
             {"second_tip", r.secondTip}}},

@@ -6,9 +6,13 @@
 // fraction of a second to seconds.
 //
 // Parameters: tip depth d along the trajectory (tip = entry + d direction, mm) and volume V (ml), within
-// bounds. Objective (maximised): coverage - 5 (max(0, p_syringe / p_max - 1) + max(0, leak - leak_max) / 0.1 ml),
-// coverage the fraction of the target sphere's volume in voxels at least half filled with cement. A plan
-// whose injection cannot run (a tip in cortex, outside the CT) scores -1 and says why.
+// bounds. Objective (maximised, planObjective): coverage - c V - 5 (max(0, p_syringe / p_max - 1) +
+// max(0, leak - leak_max) / 0.1 ml), coverage the fraction of the target sphere's volume in voxels at least half
+// filled with cement, c the cost of cement (volumeCostPerMl, 0.01 per ml by default). The trade-off: one more
+// ml of cement is worth it only if it covers at least one more percent of the target, so of two plans with the
+// same coverage the one with less cement wins (less cement, less leakage risk and heat). Leakage is the
+// injection's (cement outside the target vertebra where the anatomy is known: Modules/Simulation/Anatomy). A
+// plan whose injection cannot run (a tip in cortex, outside bone, outside the CT) scores -1 and says why.
 //
 // A second tip (secondTip): the two-depth technique on one trajectory. The cement goes in at depth d, then
 // the cannula is withdrawn to d2 = d_min + t (d - d_min), t in [0, 0.9], and the last share s in
@@ -48,6 +52,7 @@ struct PlanRequest {
   double targetRadiusMm = 5.0;
   double minVolumeMl = 0.5, maxVolumeMl = 4.0;  // the volume budget
   double maxSyringeMpa = 3.0, maxLeakageMl = 0.0;
+  double volumeCostPerMl = 0.01;                // coverage (fraction) one ml of cement must buy
   int maxEvaluations = 40;                      // over all starts
   int starts = 3;                               // independent BOBYQA starts along the trajectory
   bool secondTip = false;                       // also plan a second, shallower tip on the trajectory
@@ -56,6 +61,10 @@ struct PlanRequest {
   // a target or trajectory that leaves the CT.
   void validate(const imaging::ImageType* ct) const;
 };
+
+// The objective of a plan (see the header comment): coverage less the cement's cost and the limits' penalty.
+double planObjective(const struct PlanRequest& request, double coverage, double volumeMl, double syringeMpa,
+                     double leakageMl);
 
 struct PlanEvaluation {
   int index = 0;
