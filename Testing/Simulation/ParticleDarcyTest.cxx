@@ -6,7 +6,10 @@
 //    independently (1/r0 = 1/a + int_0^a f^2 / r^2 dr for the source weight (1 - (r/a)^2)^2, a = 1.194 mm);
 //    the volume within 1 % at every snapshot; the step-to-step tip-pressure change (median) below 5 %;
 //  * p(400) / p(100) = 4.00 within 1 % (creeping Darcy flow: p is proportional to mu);
-//  * a scaffold CT (ScaffoldCT.h): cement in solid below 0.5 % of its volume.
+//  * a hemisphere on an impermeable plane: radius 2^(1/3) times the free sphere's within 3 %;
+//  * a scaffold CT (ScaffoldCT.h): cement in solid below 0.5 % of its volume (particles against the rods'
+//    voxels, and the simulated CT's rods unchanged), the volume at every snapshot.
+// The uniform case also runs voxel-darcy for the record (its figures and the wall-time ratio, printed).
 #include "cementsph/scene/InjectionRunner.h"
 #include "ScaffoldCT.h"
 
@@ -129,6 +132,40 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
     EXPECT_NEAR(held, injected, 0.01 * injected) << "at " << h["time_s"] << " s";
   }
   EXPECT_DOUBLE_EQ(m["fluid_in_solid_fraction"].get<double>(), 0.0);
+  // The voxel model on the same case, for the record (cost ratio, its tip pressure).
+  const Outcome v = run(ct, uniformScene(100.0), "voxel-darcy");
+  std::printf("voxel-darcy on the same case: spreading %.4f mm, tip %.1f Pa, wall %.2f s (particle-darcy / voxel-darcy "
+              "wall %.2f)\n", v.result.metrics["mean_spreading_distance_mm"].get<double>(),
+              v.result.metrics["final_tip_pressure_pa"].get<double>(), v.wallS, r.wallS / v.wallS);
+}
+
+TEST(ParticleDarcy, AHemisphereOnAnImpermeablePlane) {
+  // Solid below z = 5.85 mm (voxels k < 20 of 0.3 mm), the tip at 6.0 mm: the cement is the hemisphere of
+  // the injected volume about the plane's point below the tip, R_h = 2^(1/3) R (R the free sphere's), its
+  // mean distance from that point 3 R_h / 4.
+  auto ct = uniform(40, 0.3);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i) ct->SetPixel({{i, j, k}}, 1000.f);
+  nlohmann::json scene = uniformScene(100.0);
+  scene["volume_ml"] = 0.05;
+  const Outcome r = run(ct, scene);
+  auto* pts = r.result.particles.GetPointer();
+  double mean = 0;
+  std::size_t below = 0;
+  for (vtkIdType i = 0; i < pts->GetNumberOfPoints(); ++i) {
+    double x[3];
+    pts->GetPoint(i, x);
+    mean += std::sqrt((x[0] - 6) * (x[0] - 6) + (x[1] - 6) * (x[1] - 6) + (x[2] - 5.85) * (x[2] - 5.85));
+    if (x[2] < 5.85) ++below;
+  }
+  mean /= double(pts->GetNumberOfPoints());
+  const double R = std::cbrt(3 * 0.05e-6 / (4 * kPi)) * 1e3, Rh = 4.0 / 3.0 * mean;
+  std::printf("hemisphere: radius %.4f mm against 2^(1/3) R = %.4f mm (ratio %.4f); %zu particles below the plane; "
+              "%zu steps, wall %.1f s\n", Rh, std::cbrt(2.0) * R, Rh / (std::cbrt(2.0) * R), below,
+              std::size_t(r.result.metrics["steps"]), r.wallS);
+  EXPECT_NEAR(Rh / (std::cbrt(2.0) * R), 1.0, 0.03);
+  EXPECT_EQ(below, 0u);
 }
 
 TEST(ParticleDarcy, PressureIsProportionalToViscosityAndTheCementIsTheSame) {
