@@ -39,6 +39,8 @@ int main(int argc, char** argv) {
     injection->SetInputConnection(reader->GetOutputPort());
     injection->SetBoneMaskConnection(bone->GetOutputPort());
     injection->SetScene(cementsph::scene::loadSceneFile(argv[2], {"tip_mm=[" + std::string(argv[3]) + "," + argv[4] + "," + argv[5] + "]"}));
+    // VTK 9.1's vtkFlyingEdges3D ignores the direction matrix: right for this axial phantom; for a CT with flipped
+    // or swapped axes use vtkLabelIsosurfaceFilter (cementsph/pipeline) in place of these two filters.
     vtkNew<vtkImageThreshold> cement; // labels 1 (cement) and 2 (leaked) as 1: the 0.5-isosurface then lies midway
     cement->SetInputConnection(injection->GetOutputPort(vtkSPHInjectionFilter::LabelMapPort));
     cement->ThresholdByUpper(1), cement->SetInValue(1), cement->SetOutValue(0);

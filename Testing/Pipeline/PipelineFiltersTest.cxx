@@ -5,6 +5,7 @@
 //    tessellation's sag, r (1 - cos(pi / n)) < 0.003 mm at 100 segments: 0.01 mm);
 //  * registration: the phantom against a copy of itself moved by a known translation: that translation within
 //    0.05 mm (a tenth of a voxel);
+//  * the label isosurface of a ball in a flipped-axes CT: centred on the ball's physical centre (0.01 mm);
 //  * reader -> injection on the foam phantom: the cement label map holds flow x time (0.05 ml/s x 20 s = 1 ml)
 //    in voxels at least half filled, pores of porosity 1 (pore-resolved bone), within 2 % (the half-filled
 //    front is counted at the 0.5 threshold: 9009 voxels of 0.11045 mm^3 = 0.995 ml measured).
@@ -12,6 +13,7 @@
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/pipeline/vtkAffineRegistrationFilter.h"
 #include "cementsph/pipeline/vtkCementSPHImageReader.h"
+#include "cementsph/pipeline/vtkLabelIsosurfaceFilter.h"
 #include "cementsph/pipeline/vtkSurfaceDistanceFilter.h"
 #include "vtkSPHInjectionFilter.h"
 
@@ -24,6 +26,7 @@
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkSphereSource.h>
+#include <vtkTrivialProducer.h>
 
 #include <cmath>
 #include <cstdint>
@@ -152,4 +155,37 @@ TEST(PipelineFilters, InjectionLabelMapOnThePhantomHoldsFlowTimesTime) {
   std::printf("phantom: %zu cement voxels = %.4f ml against %.4f ml\n", cement, double(cement) * voxelMl, oracleMl);
   EXPECT_NEAR(double(cement) * voxelMl / oracleMl, 1.0, 0.02);
   EXPECT_EQ(leaked, 0u); // pore-resolved bone and no mask: leakage is not assessed
+}
+
+// A ball of labels in a CT whose x and y axes are flipped (direction diag(-1, -1, 1), as a RAS-stored scan read
+// in LPS): the surface's centre is the ball's physical centre, computed here from the grid's geometry (within
+// 0.01 mm: a symmetric staircase about it), and its bounds span the ball's 6 mm radius within half a voxel.
+TEST(PipelineFilters, LabelIsosurfaceHonoursTheDirectionMatrix) {
+  vtkNew<vtkImageData> labels;
+  labels->SetDimensions(30, 30, 30);
+  labels->SetSpacing(0.5, 0.5, 0.5);
+  labels->SetOrigin(40.0, 20.0, -5.0);
+  labels->SetDirectionMatrix(-1, 0, 0, 0, -1, 0, 0, 0, 1);
+  labels->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  auto* l = static_cast<std::uint8_t*>(labels->GetScalarPointer());
+  for (int k = 0; k < 30; ++k)
+    for (int j = 0; j < 30; ++j)
+      for (int i = 0; i < 30; ++i) {
+        const double r = 0.5 * std::sqrt((i - 14.5) * (i - 14.5) + (j - 14.5) * (j - 14.5) + (k - 14.5) * (k - 14.5));
+        l[i + 30 * (j + 30 * k)] = r <= 6.0 ? (k < 15 ? 1 : 2) : 0; // cement and leaked cement: both inside
+      }
+  // Index (14.5, 14.5, 14.5) in physical space: origin + direction * spacing * index.
+  const double centre[3] = {40.0 - 0.5 * 14.5, 20.0 - 0.5 * 14.5, -5.0 + 0.5 * 14.5};
+  vtkNew<vtkTrivialProducer> source;
+  source->SetOutput(labels);
+  vtkNew<vtkLabelIsosurfaceFilter> surface;
+  surface->SetInputConnection(source->GetOutputPort());
+  surface->Update();
+  double bounds[6];
+  surface->GetOutput()->GetBounds(bounds);
+  ASSERT_GT(surface->GetOutput()->GetNumberOfCells(), 100);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(0.5 * (bounds[2 * a] + bounds[2 * a + 1]), centre[a], 0.01) << a;
+    EXPECT_NEAR(0.5 * (bounds[2 * a + 1] - bounds[2 * a]), 6.0, 0.25) << a;
+  }
 }
