@@ -116,6 +116,11 @@ def paired(name, volume, **kw):
     return res
 
 
+def demote(text):
+    """A peer benchmark's own Markdown, its headings two levels down (under this file's ###)."""
+    return re.sub(r"(?m)^(#+) ", lambda m: "#" * min(len(m.group(1)) + 2, 6) + " ", text)
+
+
 def fmt(x, f="%.2f"):
     return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f % x
 
@@ -234,7 +239,7 @@ if sph:
                 continue
             name = re.sub(r"_median$", "", b["run_name"] if "run_name" in b else b["name"])
             bench[name] = b
-    rows = ["| benchmark / threads / skin (%% of h) | ms per step | fluid-particle-steps/s | real-time factor |", "|---|---|---|---|"]
+    rows = ["| benchmark / threads / skin (% of h) | ms per step | fluid-particle-steps/s | real-time factor |", "|---|---|---|---|"]
     for name, b in sorted(bench.items()):
         ms = b["real_time"] * {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[b["time_unit"]]
         rows.append("| %s | %.2f | %s | %s |" % (name.replace("/real_time", ""), ms,
@@ -261,14 +266,14 @@ def peers():
             log = os.path.join(OUT, "drr-bench.md")
             r = run([drr, os.path.join(OUT, "drr-work"), "--repeats=5"], log=log)
             text = open(log).read()
-            for m in re.finditer(r"Speed-up, DRR time[^:]*: 1 thread ([\d.]+)x, 2 threads ([\d.]+)x", text):
+            for m in re.finditer(r"Speed-up, DRR time.*?\): 1 thread ([\d.]+)x, 2 threads ([\d.]+)x", text):
                 summary.append(("DRR 512 x 512 of a 256 x 256 x 200 CT, against plastimatch drr -i exact", "(drr-bench table)",
                                 "plastimatch time / ours: %s x (1 thread), %s x (2 threads)" % m.groups(), "drr-bench DIR --repeats=5"))
                 break
-            for m in re.finditer(r"Speed-up, whole program[^:]*: 1 thread ([\d.]+)x, 2 threads ([\d.]+)x", text):
+            for m in re.finditer(r"Speed-up, whole program.*?\): 1 thread ([\d.]+)x, 2 threads ([\d.]+)x", text):
                 summary.append(("  whole program (read, DRR, write)", "(drr-bench table)", "plastimatch / ours: %s x (1 thread), %s x (2 threads)" % m.groups(), "drr-bench"))
                 break
-            details.append("### DRR (drr-bench, rc %d)\n\n%s\n" % (r["rc"], text.strip()))
+            details.append("### DRR (drr-bench, rc %d)\n\n%s\n" % (r["rc"], demote(text.strip())))
         img = exe(BUILD, "imaging-bench")
         if img:
             log = os.path.join(OUT, "imaging-bench.md")
@@ -286,7 +291,7 @@ def peers():
             if ours:
                 summary.append(("affine registration, 128^3 pairs with cement, against elastix", "%.2f s, TRE %.3f-%.3f mm (elastix TRE %.3f-%.3f mm)" % (statistics.median(ours), min(tre), max(tre), min(etre) if etre else float("nan"), max(etre) if etre else float("nan")),
                                 "elastix time / ours: %s x (median of pairs)" % ratio(statistics.median(theirs), statistics.median(ours)) if theirs else "n/a", "imaging-bench DIR " + os.environ["IMAGING_ARGS"]))
-            details.append("### Registration (imaging-bench %s, rc %d)\n\n%s\n" % (os.environ["IMAGING_ARGS"], r["rc"], text.strip()))
+            details.append("### Registration (imaging-bench %s, rc %d)\n\n%s\n" % (os.environ["IMAGING_ARGS"], r["rc"], demote(text.strip())))
 
 
 
@@ -309,7 +314,7 @@ md.append("Machine: %s, %d cores, %.0f GB; load average at start %s, at end %s, 
               started.strftime("%H:%M"), ended.strftime("%H:%M")))
 md.append("| benchmark | figure | ratio | command |\n|---|---|---|---|")
 for s in summary:
-    md.append("| %s | %s | %s | `%s` |" % s)
+    md.append("| %s | %s | %s | `%s` |" % tuple(x.replace("|", "\\|") for x in s))  # a filter's | inside a cell
 md.append("")
 md.extend(details)
 text = "\n".join(md) + "\n"
