@@ -94,3 +94,17 @@ TEST(VertebraLeak, CementInTheDiscIsADiscLeakOfItsWholeVolume) {
   EXPECT_NEAR(m.at("leakage_by_class").at("volume_ml_by_kind").at("disc").get<double>(), 0.1, 0.001)
       << m.at("leakage_by_class").dump();
 }
+
+// A cannula whose shaft runs through the disc (straight down from above the body: direction -z, tip 5 mm below
+// the upper end plate, cannula 30 mm long, so 5-15 mm behind the tip lie in the 10 mm disc) is one warning naming
+// the disc; the posterior approach of the tests above gives none.
+TEST(VertebraLeak, AShaftThroughTheDiscIsAWarning) {
+  auto scene = sceneAt({variant().centre[0], variant().centre[1], variant().centre[2] + 12.5 - 5}, 0.05);
+  scene.direction = Eigen::Vector3d(0, 0, -1);
+  scene.cannulaLengthMm = 30;
+  const auto r = scene::runInjection(variant().phantom.ct, scene, {});
+  ASSERT_EQ(r.summary.warnings.size(), 1u) << r.metrics.at("warnings").dump();
+  EXPECT_NE(r.summary.warnings[0].find("intervertebral disc"), std::string::npos) << r.summary.warnings[0];
+  const auto fromBehind = scene::runInjection(variant().phantom.ct, sceneAt(variant().fat, 0.05), {});
+  EXPECT_TRUE(fromBehind.summary.warnings.empty()) << fromBehind.metrics.at("warnings").dump();
+}

@@ -209,7 +209,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
 
   // The loop: steps of at most the time to the next snapshot or the end.
   const double T = scene.injectionDurationS();
-  const double endTime = T * (1 - 1e-12);
+  const double endTime = T * (1 - model->endSlack());
   detail::InjectionProgress progress(o, wallStart, T);
   double nextSnapshot = scene.snapshotIntervalS;
   while (model->time() < endTime) {
@@ -261,6 +261,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   summarisePressures(result.tipSeries, s);
   s.volumeHistory.push_back(volumeRecord()); // the final state
   model->report(s, result.engineFigures);
+  for (const std::string& w : s.warnings) std::cerr << "inject: warning: " << w << "\n";
 
   result.particles = model->cement();
   s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());

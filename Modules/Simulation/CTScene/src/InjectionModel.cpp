@@ -61,6 +61,7 @@ json InjectionSummary::toJson() const {
     sites.push_back({{"position_mm", l.positionMm}, {"first_time_s", l.firstTimeS}, {"volume_ml", l.volumeMl},
                      {"site_class", l.siteClass}});
   m["leakage_sites"] = sites;
+  m["warnings"] = warnings;
   return m;
 }
 
@@ -124,6 +125,7 @@ InjectionSummary InjectionSummary::fromJson(const json& m) {
   s.huPerRelativeDensity = field<double>(m, "simulated_ct_hu_per_relative_density");
   s.leakageAssessed = field<bool>(m, "leakage_assessed");
   s.leakageVolumeMl = field<double>(m, "leakage_volume_ml");
+  s.warnings = field<std::vector<std::string>>(m, "warnings");
   for (const json& l : field<json>(m, "leakage_sites"))
     s.leakageSites.push_back({field<std::array<double, 3>>(l, "position_mm"), field<double>(l, "first_time_s"),
                               field<double>(l, "volume_ml"), field<std::string>(l, "site_class")});

@@ -88,6 +88,7 @@ struct InjectionSummary {
   double leakageVolumeMl = 0;
   std::vector<LeakageSite> leakageSites;
   nlohmann::json volumeHistory = nlohmann::json::array(); // {time_s, volume_injected_ml, cement_volume_ml}
+  std::vector<std::string> warnings; // what a planning engineer must know (a shaft through the disc, ...)
 
   nlohmann::json toJson() const;
   // The inverse, for a summary that crossed a process boundary (MPI studies); throws std::invalid_argument
@@ -129,6 +130,9 @@ public:
   // Sets the engine up; std::invalid_argument (one line naming the scene key) for a scene it cannot run.
   virtual void start(const InjectionSetup& setup) = 0;
   virtual double time() const = 0;                        // simulated [s]
+  // The run ends once time() >= T (1 - endSlack()): an engine that steps exactly to T (the voxel model) allows
+  // round-off; one with steps of its own (the particles) runs until it has passed T, as it always did.
+  virtual double endSlack() const { return 1e-12; }
   // One step of at most dtMax [s]; an engine with its own stability limit may take less. Throws
   // sph::SimulationError if the run goes unstable (naming where and why).
   virtual void advance(double dtMax) = 0;

@@ -122,6 +122,7 @@ public:
   }
 
   double time() const override { return sim_->time(); }
+  double endSlack() const override { return 0.0; }
 
   // One step of the engine's own size (its stability and displacement limits); dtMax is not imposed, so that
   // both presets keep their step sequence (VALIDATION.md).

@@ -35,6 +35,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 namespace cementsph::scene {
@@ -369,6 +370,7 @@ public:
         s.leakageSites.push_back({site.at("position_mm").get<std::array<double, 3>>(), site.at("first_time_s").get<double>(),
                                   site.at("volume_ml").get<double>(), "soft-tissue"});
     }
+    s.warnings.insert(s.warnings.end(), shaftWarnings_.begin(), shaftWarnings_.end());
     if (continuum_) {
       e["leak_rule"] = leakRule_;
       e["bone_calibration"] = {{"marrow_hu", scene.bone.marrowHu},
@@ -503,6 +505,29 @@ private:
       leak_[c] = roi.at(c) != anatomy::TissueClass::TargetVertebra;
     }
     leakRule_ = "anatomy (" + cube.rule + "): cement outside the target vertebra is leakage; " + cube.description;
+    // The cannula's shaft, a cannula length behind the tip: through the disc, the canal or a vessel it is a
+    // plan to look at again (a transpedicular shaft crosses the pedicle's cortex, which is expected).
+    const Eigen::Vector3d axis = scene.direction.normalized();
+    const double step = 0.25 * cube.grid.spacingMm[0];
+    for (anatomy::TissueClass bad :
+         {anatomy::TissueClass::Disc, anatomy::TissueClass::Canal, anatomy::TissueClass::Vessel}) {
+      double first = -1, last = -1;
+      for (double behind = step; behind <= scene.cannulaLengthMm; behind += step) {
+        const Eigen::Vector3d p = tipMm - behind * axis;
+        if (cube.atPoint({p.x(), p.y(), p.z()}) == bad) {
+          if (first < 0) first = behind;
+          last = behind;
+        }
+      }
+      if (first >= 0) {
+        std::ostringstream w;
+        w.precision(3);
+        w << "the cannula's shaft crosses " << anatomy::tissueWords(bad) << " " << first << " to " << last
+          << " mm behind the tip (direction " << axis.x() << ", " << axis.y() << ", " << axis.z()
+          << "): check the trajectory";
+        shaftWarnings_.push_back(w.str());
+      }
+    }
     anatomy_ = std::move(roi);
   }
 
@@ -561,6 +586,7 @@ private:
   std::vector<std::uint8_t> leak_; // continuum: voxels outside the target bone, where cement is leakage
   std::optional<anatomy::Anatomy> anatomy_; // continuum: the tissue classes on the region's grid
   std::string leakRule_;
+  std::vector<std::string> shaftWarnings_;
   std::size_t shaftVoxels_ = 0;
   std::vector<std::size_t> tractVoxels_;
   std::vector<float> tractPorosity_;
