@@ -75,6 +75,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kHOverD = 1.5;          // smoothing length / lattice spacing
+constexpr double kMinTheta = 0.2;        // ghost-fluid: smallest share of the way to a ghost (conditioning)
 constexpr double kRelaxSteps = 4.0;      // density-invariant relaxation time / dt
 constexpr double kMaxMoveOverD = 0.2;    // largest advective move per step
 constexpr double kShiftA = 2.0;          // Lind et al. 2012: D = A h |u| dt
@@ -428,6 +429,9 @@ private:
     std::vector<double> number(n, kernel_.w(0.0));
     for (std::size_t q = 0; q < pairI_.size(); ++q) number[std::size_t(pairI_[q])] += pairW_[q], number[std::size_t(pairJ_[q])] += pairW_[q];
     const double vc = g.voxelVolume();
+    std::vector<double> colourAt(n);
+    for (std::size_t i = 0; i < n; ++i) colourAt[i] = volume_ * number[i]; // C at the particle, particles only
+    ghostPull_.assign(n, Eigen::Vector3d::Zero());
     frontParticles_ = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Vector3d& p = x_[i];
@@ -451,9 +455,14 @@ private:
               number[i] += vc / volume_ * kernel_.w(rn);
             } else if (!occupied_[v]) {
               number[i] += vc / volume_ * kernel_.w(rn);
-              ghostF_[i] += vc * f;
+              // Ghost-fluid (Gibou et al. 2002): the surface C = 1/2 lies theta of the way from the particle
+              // to the ghost (C linear between them); p = 0 there, so the ghost's value is p_i (1 - 1/theta).
+              const double cg = colour_[v], ci = colourAt[i];
+              const double theta = ci > cg ? std::clamp((ci - 0.5) / (ci - cg), kMinTheta, 1.0) : 1.0;
+              ghostF_[i] += vc * f / theta;
               ghostB_[i] += vc * f * r * r.transpose();
               ghostNormal_[i] += vc * f * r;
+              ghostPull_[i] += vc * f / theta * r;
             }
           }
       if (ghostF_[i] > 0) ++frontParticles_;
@@ -559,7 +568,7 @@ private:
     std::vector<Eigen::Vector3d> s(n, Eigen::Vector3d::Zero());
     for (std::size_t i = 0; i < n; ++i) {
       B[i] = ghostB_[i];
-      s[i] = -p_[i] * ghostNormal_[i]; // ghosts at p = 0: (0 - p_i)(x_c - x_i) V_c F/r
+      s[i] = -p_[i] * ghostPull_[i]; // ghosts: (p_g - p_i)(x_c - x_i) V_c F/r, p_g - p_i = -p_i / theta
     }
     for (std::size_t q = 0; q < pairI_.size(); ++q) {
       const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
@@ -668,7 +677,7 @@ private:
   std::vector<int> pairI_, pairJ_;
   std::vector<double> pairF_, pairW_, ghostF_, omega_, pairA_, diagA_;
   std::vector<Eigen::Matrix3d> ghostB_;
-  std::vector<Eigen::Vector3d> ghostNormal_, closedGradC_;
+  std::vector<Eigen::Vector3d> ghostNormal_, ghostPull_, closedGradC_;
   // Solver figures.
   std::size_t solves_ = 0, iterations_ = 0, unconverged_ = 0;
   double worstResidual_ = 0, solveSeconds_ = 0, geometrySeconds_ = 0;
