@@ -28,6 +28,9 @@ PACKAGES=(
   # the cementsph Python module (Python/, issue 22): pybind11, Python's headers, numpy for its arrays
   # (python3-vtk9, for VTK objects in Python, comes with libvtk9-dev)
   pybind11-dev python3-dev python3-numpy
+  # the sanitizer and fuzzing stage (scripts/ci-sanitizers.sh, issues 21 and 24): clang, its libFuzzer and
+  # sanitizer runtimes, its OpenMP, and zlib's headers (the header checks are compiled directly)
+  clang-14 libclang-rt-14-dev libomp-14-dev zlib1g-dev
 )
 
 SUDO=""

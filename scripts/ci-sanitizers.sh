@@ -1,0 +1,119 @@
+#!/usr/bin/env bash
+# CI sanitizer stage (issues 21 item 6, 24 item 4): clang with AddressSanitizer + UndefinedBehaviorSanitizer
+# (-O1 -g, any UB report fatal), in its own build folder, for
+#   1. the libFuzzer targets in Testing/Fuzz/targets (nrrd_header, metaimage_header, nifti_header: our
+#      header checks that run before ITK; scene_json: the scene file parser), each run for FUZZ_SECONDS on
+#      its seed corpus Testing/Fuzz/corpus/<target> (new inputs go to a temporary folder, never the tree);
+#   2. the unit suites of the plain C++ core (SPH, Scene), which need neither VTK nor ITK.
+# The suites that link VTK/ITK are not built here: a clang ASan build of the whole tree does not fit CI's
+# time on a 2-core machine. Fails (exit 1) on any build error, fuzzer finding (crash, UB, leak, timeout,
+# out-of-memory) or failed test; a fuzzer's reproducer is left in $SANITIZE_BUILD_DIR/findings/.
+# Sources are compiled directly (a generated Makefile, incremental), under the shared build lock.
+# Environment: SANITIZE_BUILD_DIR (default ./build-sanitize), FUZZ_SECONDS (default 45), JOBS (default nproc),
+# CEMENTSPH_BUILD_LOCK (default /tmp/cementsph-build.lock; do not call this script under that lock).
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+out="${SANITIZE_BUILD_DIR:-$here/build-sanitize}"
+seconds="${FUZZ_SECONDS:-45}"
+jobs="${JOBS:-$(nproc)}"
+lock="${CEMENTSPH_BUILD_LOCK:-/tmp/cementsph-build.lock}"
+start=$SECONDS
+
+cxx="$(command -v clang++-14 || command -v clang++ || true)"
+if [ -z "$cxx" ]; then echo "ci-sanitizers.sh: clang++ not found (scripts/install-deps.sh installs clang-14)" >&2; exit 1; fi
+if ! "$cxx" -print-file-name=libclang_rt.fuzzer-x86_64.a | grep -q /; then
+  echo "ci-sanitizers.sh: libFuzzer runtime missing (scripts/install-deps.sh installs libclang-rt-14-dev)" >&2; exit 1
+fi
+mkdir -p "$out/obj" "$out/bin" "$out/findings"
+
+# ---- build ----
+sph_src=$(cd "$here" && find Modules/Core/SPH/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
+includes="-I$here/Modules/Core/SPH/include -I$here/Modules/Simulation/Scene/include -I$here/Modules/Imaging/IO/src \
+-I$here/Testing/Fuzz/targets -isystem /usr/include/eigen3"
+# Unit suites built here: those of Testing/Core/SPH and Testing/Simulation labelled unit that link only
+# CementSPH::SPH or CementSPH::Scene (name:source).
+tests="SPHKernelsTest:Testing/Core/SPH/KernelsTest.cxx SPHSimulationTest:Testing/Core/SPH/SimulationTest.cxx
+SPHFixedParticleFieldTest:Testing/Core/SPH/FixedParticleFieldTest.cxx SPHInjectionUnitTest:Testing/Core/SPH/InjectionUnitTest.cxx
+SPHRheologyTest:Testing/Core/SPH/RheologyTest.cxx SceneConfigTest:Testing/Simulation/SceneConfigTest.cxx
+RunEstimateTest:Testing/Simulation/RunEstimateTest.cxx"
+fuzzers="nrrd_header metaimage_header nifti_header scene_json"
+launcher=""
+if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
+{
+  echo "CXX := $launcher$cxx"
+  echo "CXXFLAGS := -std=c++17 -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined -fopenmp -MMD -MP $includes"
+  echo "CXXFLAGS += -DCEMENTSPH_TEST_DATA_DIR=\\\"$here/Data\\\" -DCEMENTSPH_BINARY_DIR=\\\"$out\\\""
+  echo "LDFLAGS := -fsanitize=address,undefined -fopenmp"
+  echo "SRC := $here"
+  objs=""
+  for s in $sph_src; do o="obj/${s//\//_}.o"; objs="$objs $o"; echo "$o: \$(SRC)/$s"; echo "	\$(CXX) \$(CXXFLAGS) -c \$< -o \$@"; done
+  echo "obj/VolumeFileChecks.o: \$(SRC)/Modules/Imaging/IO/src/VolumeFileChecks.cpp"
+  echo "	\$(CXX) \$(CXXFLAGS) -c \$< -o \$@"
+  echo "lib/libcore.a:$objs"
+  echo "	mkdir -p lib && rm -f \$@ && ar rcs \$@ \$^"
+  all=""
+  for f in $fuzzers; do
+    all="$all bin/$f"
+    echo "obj/fuzz_$f.o: \$(SRC)/Testing/Fuzz/targets/$f.cxx"
+    echo "	\$(CXX) \$(CXXFLAGS) -fsanitize=fuzzer-no-link -c \$< -o \$@"
+    deps="obj/fuzz_$f.o"
+    if [ "$f" = scene_json ]; then deps="$deps lib/libcore.a"; else deps="$deps obj/VolumeFileChecks.o"; fi
+    echo "bin/$f: $deps"
+    echo "	\$(CXX) \$(LDFLAGS) -fsanitize=fuzzer \$^ -lz -o \$@"
+  done
+  for t in $tests; do
+    n="${t%%:*}"; s="${t#*:}"; all="$all bin/$n"
+    echo "obj/test_$n.o: \$(SRC)/$s"
+    echo "	\$(CXX) \$(CXXFLAGS) -I\$(SRC)/$(dirname "$s") -c \$< -o \$@"
+    echo "bin/$n: obj/test_$n.o lib/libcore.a"
+    echo "	\$(CXX) \$(LDFLAGS) \$^ -lgtest_main -lgtest -lpthread -o \$@"
+  done
+  echo "all:$all"
+  echo "-include obj/*.d"
+  echo ".DEFAULT_GOAL := all"
+} > "$out/Makefile"
+echo "ci-sanitizers.sh: building in $out (clang, -O1 -g, ASan+UBSan)"
+if ! flock "$lock" make -C "$out" -j"$jobs" -s > "$out/build.log" 2>&1; then
+  tail -n 60 "$out/build.log"; echo "ci-sanitizers.sh: sanitizer build failed ($out/build.log)" >&2; exit 1
+fi
+echo "ci-sanitizers.sh: built in $((SECONDS - start)) s"
+
+# ---- runs ----
+export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=2
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+failed=0
+
+fuzz() { # one target: its own scratch corpus and TMPDIR; the seeds are read, not written
+  local f="$1" log="$work/$1.log"
+  mkdir -p "$work/$f/corpus" "$work/$f/tmp"
+  if TMPDIR="$work/$f/tmp" timeout $((seconds + 60)) "$out/bin/$f" -max_total_time="$seconds" -timeout=10 \
+       -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -artifact_prefix="$out/findings/$f-" \
+       "$work/$f/corpus" "$here/Testing/Fuzz/corpus/$f" > "$log" 2>&1; then
+    echo "fuzz $f: nothing found ($(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$') runs in ${seconds} s)"
+  else
+    echo "fuzz $f: FINDING (reproducer in $out/findings/; log below)"; tail -n 80 "$log"; return 1
+  fi
+}
+# Two targets at a time on two cores: the budget is wall time, so a loaded machine runs fewer inputs, never fails.
+pids=()
+for f in $fuzzers; do
+  fuzz "$f" & pids+=($!)
+  if [ ${#pids[@]} -ge "$jobs" ]; then wait "${pids[0]}" || failed=1; pids=("${pids[@]:1}"); fi
+done
+for p in "${pids[@]}"; do wait "$p" || failed=1; done
+
+for t in $tests; do
+  n="${t%%:*}"
+  if (cd "$work" && timeout 300 "$out/bin/$n" --gtest_brief=1 > "$work/$n.log" 2>&1); then
+    echo "unit $n: passed ($(grep -o '[0-9]* tests\? from [0-9]* test suites\? ran' "$work/$n.log" | head -1 | cut -d' ' -f1) tests)"
+  else
+    echo "unit $n: FAILED under ASan/UBSan"; tail -n 80 "$work/$n.log"; failed=1
+  fi
+done
+
+echo "ci-sanitizers.sh: $((SECONDS - start)) s in all"
+if [ "$failed" -ne 0 ]; then echo "ci-sanitizers.sh: sanitizer stage failed" >&2; exit 1; fi
+echo "ci-sanitizers.sh: sanitizer stage passed"
