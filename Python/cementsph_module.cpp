@@ -21,6 +21,8 @@
 #include <pybind11/stl.h>
 
 #include <nlohmann/json.hpp>
+#include <vtkCallbackCommand.h>
+#include <vtkCommand.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkMatrix3x3.h>
@@ -133,8 +135,28 @@ cementsph::scene::SceneConfig sceneOf(const py::handle& scene) {
   return s;
 }
 
+// on_progress(fraction) from the run's thread, with the GIL taken for the call: False stops the run (as
+// SetAbortExecute); an exception stops it too and is raised again once the run is back.
+struct ProgressRelay {
+  py::object callback;
+  std::exception_ptr error;
+  static void call(vtkObject* caller, unsigned long, void* clientData, void* callData) {
+    auto* relay = static_cast<ProgressRelay*>(clientData);
+    auto* filter = static_cast<vtkSPHInjectionFilter*>(caller);
+    if (relay->error) return;
+    py::gil_scoped_acquire acquire;
+    try {
+      const py::object answer = relay->callback(*static_cast<double*>(callData));
+      if (!answer.is_none() && !answer.cast<bool>()) filter->SetAbortExecute(1);
+    } catch (...) {
+      relay->error = std::current_exception();
+      filter->SetAbortExecute(1);
+    }
+  }
+};
+
 py::dict injectPy(const Volume& volume, const py::dict& geometry, const py::object& scene, const py::object& tip,
-                  const std::string& outDir, bool progress, const py::object& boneMask) {
+                  const std::string& outDir, bool progress, const py::object& boneMask, const py::object& onProgress) {
   cementsph::scene::SceneConfig s = sceneOf(scene);
   if (!tip.is_none()) {
     const auto t = tip.cast<std::vector<double>>();
@@ -155,11 +177,20 @@ py::dict injectPy(const Volume& volume, const py::dict& geometry, const py::obje
   filter->SetScene(s);
   filter->SetOutputDirectory(outDir);
   filter->SetPrintProgress(progress);
+  ProgressRelay relay;
+  if (!onProgress.is_none()) {
+    relay.callback = onProgress;
+    auto observer = vtkSmartPointer<vtkCallbackCommand>::New();
+    observer->SetCallback(&ProgressRelay::call);
+    observer->SetClientData(&relay);
+    filter->AddObserver(vtkCommand::ProgressEvent, observer);
+  }
   {
     // The run touches no Python object: other Python threads go on meanwhile.
     py::gil_scoped_release release;
     filter->Update();
   }
+  if (relay.error) std::rethrow_exception(relay.error);
   filter->RethrowIfFailed();
   py::dict r;
   r["metrics"] = fromJson(nlohmann::json::parse(filter->GetMetricsJSON()));
@@ -222,11 +253,13 @@ PYBIND11_MODULE(cementsph, m) {
 
   m.def("inject", &injectPy, py::arg("volume"), py::arg("geometry"), py::arg("scene"), py::arg("tip_mm") = py::none(),
         py::arg("out_dir") = "", py::arg("progress") = false, py::arg("bone_mask") = py::none(),
+        py::arg("on_progress") = py::none(),
         "Injects cement into a CT (HU, [z, y, x]) at tip_mm (or the scene's tip_mm), through vtkSPHInjectionFilter "
         "with the GIL released. Returns a dict: metrics (metrics.json as a dict), summary (the typed summary), "
         "simulated_ct and labels (0 none, 1 cement, 2 leaked) on the INPUT grid ([z, y, x], geometry), "
         "cement_points (N x 3, mm) and cement_arrays (their point arrays). out_dir: also write the run's files. "
-        "bone_mask: an array of the volume's shape, non-zero = bone; cement where it is 0 is labelled leaked (2).");
+        "bone_mask: an array of the volume's shape, non-zero = bone; cement where it is 0 is labelled leaked (2). "
+        "on_progress(fraction): called as the run advances (0..1); returning False stops it (metrics: stopped_early).");
 
   m.def(
       "register",

@@ -15,7 +15,8 @@ PYTHONPATH=build/python and CEMENTSPH_DATA_DIR=Data.
     all far from the cement (exact); no leak in intact bone; with a bone mask, leaked exactly where it is 0.
   * inject, the foam phantom (pore-resolved, porosity 1 in the pores): the cement points' volumes add up to
     flow x time (1e-9) and the label map holds it within 2 %; the outputs lie on the input grid.
-  * the GIL is released during inject: another Python thread never pauses for half the run.
+  * the GIL is released during inject: another Python thread never pauses for half the run; on_progress
+    sees rising fractions to 1, and returning False stops the run before volume / flow.
   * register: a copy of the phantom moved by a known translation: that translation within 0.05 mm.
   * compare: two concentric voxelised balls: the analytic Dice, the 2 mm between their surfaces, their volumes.
   * drr: a parallel beam through a 20 mm water cube in air: 0.1 x 0.022 /mm x 20 mm (plastimatch's water
@@ -198,6 +199,26 @@ class InjectPhantom(unittest.TestCase):
         duration = span["end"] - span["start"]
         self.assertGreater(duration, 0.05)
         self.assertLess(longest, 0.5 * duration)
+
+    def test_progress_and_stop(self):
+        # Progress fractions rise to 1 over a whole run; returning False at the first report stops the run
+        # before the end of injection (volume over flow: 1 ml / 0.05 ml/s = 20 s).
+        volume, geometry = uniform_block()
+        scene = {"volume_ml": 1.0, "cannula_wall": False}
+        seen = []
+        cementsph.inject(volume, geometry, scene, tip_mm=[15.0, 15.0, 15.0], on_progress=seen.append)
+        self.assertGreater(len(seen), 10)
+        self.assertEqual(seen, sorted(seen))
+        self.assertEqual(seen[-1], 1.0)
+        stopped = cementsph.inject(volume, geometry, scene, tip_mm=[15.0, 15.0, 15.0], on_progress=lambda f: False)
+        self.assertTrue(stopped["metrics"]["stopped_early"])
+        self.assertLess(stopped["metrics"]["simulated_time_s"], 20.0)
+
+        def broken(fraction):
+            raise KeyError("from the callback")
+
+        with self.assertRaises(KeyError):
+            cementsph.inject(volume, geometry, scene, tip_mm=[15.0, 15.0, 15.0], on_progress=broken)
 
     def test_bad_tip_is_one_line(self):
         volume, geometry = uniform_block()
