@@ -295,6 +295,12 @@ public:
     e["pore_permeability_m2"] = poreK_;
     e["outlet_source_radius_mm"] = sourceRadius_ * 1e3;
     e["outlet_effective_radius_mm"] = effectiveRadius_ * 1e3;
+    // The voxel model's outlet pressure definition (the plain mean over the outlet ball), for comparison.
+    double ballSum = 0;
+    std::size_t ballCount = 0;
+    for (std::size_t i = 0; i < x_.size() && i < p_.size(); ++i)
+      if ((x_[i] - tip_).norm() <= sourceRadius_) ballSum += p_[i], ++ballCount;
+    e["outlet_ball_mean_pressure_pa"] = ballCount ? ballSum / double(ballCount) : 0.0;
     e["particle_spacing_mm"] = d_ * 1e3;
     e["smoothing_length_mm"] = kernel_.h * 1e3;
     e["particle_volume_mm3"] = volume_ * 1e9;
@@ -582,9 +588,9 @@ private:
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Vector3d grad;
       const double tr = B[i].trace();
-      Eigen::LDLT<Eigen::Matrix3d> ldlt(B[i]);
-      const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(B[i], Eigen::EigenvaluesOnly).eigenvalues();
-      if (tr > 0 && ev.minCoeff() > 0.05 * tr) grad = ldlt.solve(s[i]);
+      // Corrected where B is well conditioned (det >= 1e-3 (tr/3)^3; a full support: B = I), else the plain
+      // normalised sum (a particle with its neighbours on one side only).
+      if (tr > 0 && B[i].determinant() > 1e-3 * std::pow(tr / 3, 3)) grad = B[i].inverse() * s[i];
       else grad = tr > 0 ? Eigen::Vector3d(3.0 * s[i] / tr) : Eigen::Vector3d::Zero();
       u_[i] = -mobility_ * grad;
     }
