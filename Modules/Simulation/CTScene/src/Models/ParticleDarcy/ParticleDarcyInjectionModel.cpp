@@ -412,7 +412,8 @@ private:
       for (int k = lo[2]; k <= hi[2]; ++k)
         for (int j = lo[1]; j <= hi[1]; ++j)
           for (int i = lo[0]; i <= hi[0]; ++i)
-            colour_[g.index(i, j, k)] += float(volume_ * kernel_.w((g.centre(i, j, k) - p).norm()));
+            if (const double r2 = (g.centre(i, j, k) - p).squaredNorm(); r2 < cs * cs)
+              colour_[g.index(i, j, k)] += float(volume_ * kernel_.w(std::sqrt(r2)));
     }
     for (std::size_t c = 0; c < g.count(); ++c) occupied_[c] = colour_[c] >= 0.5f;
     auto stamp = [&](const Eigen::Vector3d& p, double radius) {
@@ -449,12 +450,13 @@ private:
       for (int k = lo[2]; k <= hi[2]; ++k)
         for (int j = lo[1]; j <= hi[1]; ++j)
           for (int ii = lo[0]; ii <= hi[0]; ++ii) {
+            const bool inside = ii >= 0 && j >= 0 && k >= 0 && ii < g.size[0] && j < g.size[1] && k < g.size[2];
+            const std::size_t v = inside ? g.index(ii, j, k) : 0;
+            if (inside && !closed_[v] && occupied_[v]) continue; // cement: the particles' own sums
             const Eigen::Vector3d c = g.origin + g.spacing.cwiseProduct(Eigen::Vector3d(ii, j, k));
             const Eigen::Vector3d r = c - p;
             const double rn = r.norm();
             if (rn >= cs || rn == 0) continue;
-            const bool inside = ii >= 0 && j >= 0 && k >= 0 && ii < g.size[0] && j < g.size[1] && k < g.size[2];
-            const std::size_t v = inside ? g.index(ii, j, k) : 0;
             const double f = kernel_.fOverR(rn);
             if (!inside || closed_[v]) {
               closedGradC_[i] += vc * f * r; // grad_i W toward the closed voxel: counted as occupied
