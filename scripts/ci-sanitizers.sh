@@ -90,7 +90,7 @@ fuzz() { # one target: its own scratch corpus and TMPDIR; the seeds are read, no
   local f="$1" log="$work/$1.log"
   mkdir -p "$work/$f/corpus" "$work/$f/tmp"
   if TMPDIR="$work/$f/tmp" timeout $((seconds + 60)) "$out/bin/$f" -max_total_time="$seconds" -timeout=10 \
-       -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -artifact_prefix="$out/findings/$f-" \
+       -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$out/findings/$f-" \
        "$work/$f/corpus" "$here/Testing/Fuzz/corpus/$f" > "$log" 2>&1; then
     echo "fuzz $f: nothing found ($(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$') runs in ${seconds} s)"
   else

@@ -74,14 +74,21 @@ inline void writeCompanions() {
 }
 
 // A refusal is an accepted outcome when it is what the code promises: a std::exception whose message is one
-// line that starts with `prefix` (the file's path). Anything else aborts, which libFuzzer reports as a
+// line that starts with `prefix` (the input's path) or, for a damaged data file a header names, with that
+// data file's path (an existing file, followed by ": "). Anything else aborts, which libFuzzer reports as a
 // finding with the input that caused it.
 inline void requireReadableRefusal(const std::exception& e, const std::string& prefix, const char* target) {
   const std::string what = e.what();
-  if (what.compare(0, prefix.size(), prefix) != 0 || what.find('\n') != std::string::npos ||
-      what.find('\r') != std::string::npos) {
-    std::fprintf(stderr, "%s: a refusal that is not one line starting with '%s':\n%s\n", target, prefix.c_str(),
-                 what.c_str());
+  const bool oneLine = what.find('\n') == std::string::npos && what.find('\r') == std::string::npos;
+  bool named = what.compare(0, prefix.size(), prefix) == 0;
+  if (!named) {
+    const auto colon = what.find(": ");
+    std::error_code ec;
+    named = colon != std::string::npos && colon > 0 && std::filesystem::is_regular_file(what.substr(0, colon), ec);
+  }
+  if (!oneLine || !named) {
+    std::fprintf(stderr, "%s: a refusal that is not one line starting with '%s' or a data file's path:\n%s\n", target,
+                 prefix.c_str(), what.c_str());
     std::abort();
   }
 }

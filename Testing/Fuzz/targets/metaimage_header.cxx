@@ -1,7 +1,8 @@
 // libFuzzer target: bytes -> a .mha file -> the checks VolumeIO makes before ITK sees the file
 // (checkHeaderBeforeItk) and, for a header they pass, the payload check (checkPayload) with two image sizes.
-// A refusal (std::exception, one line starting with the path) is the accepted outcome; a crash, a hang,
-// undefined behaviour or a leak is a finding. ITK's readers are never called.
+// A refusal (std::exception, one line starting with the path of the header or of its damaged data file) is
+// the accepted outcome; a crash, a hang, undefined behaviour or a leak is a finding. ITK's readers are never
+// called.
 #include "FuzzCommon.h"
 #include "VolumeFileChecks.h"
 
