@@ -19,6 +19,7 @@ namespace cementsph::app {
 // `cementsph inject`.
 struct InjectRequest {
   std::string ct, scene, out;
+  std::string labels;                 // --labels: a label map on the CT's grid (scene key labels_path)
   std::vector<std::string> overrides; // "key=value" scene overrides, applied in order after the scene file
   int threads = 0;                    // 0: the cores the load average leaves free
   bool quiet = false, noPictures = false, allowLarge = false;

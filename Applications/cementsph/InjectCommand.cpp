@@ -50,6 +50,9 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   sub.add_option("--out", a->request.out, "Output directory (created; existing files are replaced)")->required();
   cementsph::app::addSceneOverrideOptions(sub, a->overrides);
   sub.add_option("--threads", a->request.threads, "OpenMP threads (0: the cores the load average leaves free)");
+  sub.add_option("--labels", a->request.labels,
+                 "Label map on the CT's grid (e.g. TotalSegmentator's or a 3D Slicer segmentation) for the tissue "
+                 "classes instead of the CT bone rule (scene key labels_path; label_table says which label is what)");
   sub.add_flag("--quiet", a->request.quiet, "No progress line");
   sub.add_flag("--allow-large", a->request.allowLarge,
                "Run even when the estimated work is hours (or memory over half the RAM); docs: README 'Bad input'");
@@ -68,7 +71,8 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
 namespace cementsph::app {
 
 int runInject(const InjectRequest& a) {
-  const cementsph::scene::SceneConfig scene = cementsph::scene::loadSceneFile(a.scene, a.overrides);
+  cementsph::scene::SceneConfig scene = cementsph::scene::loadSceneFile(a.scene, a.overrides);
+  if (!a.labels.empty()) scene.labelsPath = a.labels;
   if (a.threads > 0) omp_set_num_threads(a.threads);
   // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files.
   const auto image = cementsph::imaging::readVolume(a.ct);

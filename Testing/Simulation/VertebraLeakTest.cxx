@@ -4,12 +4,15 @@
 // the body's centre at (field_x / 2, 21, field_z / 2), semi-axes 20 x 15 mm, half height 12.5 mm; fat 7 mm left,
 // 3 mm anterior, 2 mm superior of it; discs 10 mm high above and below), written out here, and conservation of the
 // injected volume; never a figure of an earlier run.
+#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/phantom/VertebraPhantom.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include <gtest/gtest.h>
+#include <itkImageRegionIteratorWithIndex.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 using namespace cementsph;
@@ -107,4 +110,66 @@ TEST(VertebraLeak, AShaftThroughTheDiscIsAWarning) {
   EXPECT_NE(r.summary.warnings[0].find("intervertebral disc"), std::string::npos) << r.summary.warnings[0];
   const auto fromBehind = scene::runInjection(variant().phantom.ct, sceneAt(variant().fat, 0.05), {});
   EXPECT_TRUE(fromBehind.summary.warnings.empty()) << fromBehind.metrics.at("warnings").dump();
+}
+
+// With a label map (labels_path, label_table), the classes come from the labels, not the CT bone rule: the body
+// labelled as vertebra 31 and the disc spaces as 200 from the phantom's analytic geometry (the layout above),
+// written as a NRRD on the CT's grid. A tip in the disc is refused naming it; 0.2 ml at the fat's centre (inside
+// the labelled body) leaks nothing; and a label map on another grid is one line naming the file.
+TEST(VertebraLeak, ALabelMapGivesTheClasses) {
+  const auto& v = variant();
+  auto labels = imaging::ImageType::New();
+  labels->CopyInformation(v.phantom.ct);
+  labels->SetRegions(v.phantom.ct->GetLargestPossibleRegion());
+  labels->Allocate();
+  itk::ImageRegionIteratorWithIndex<imaging::ImageType> it(labels, labels->GetLargestPossibleRegion());
+  for (; !it.IsAtEnd(); ++it) {
+    imaging::ImageType::PointType p;
+    labels->TransformIndexToPhysicalPoint(it.GetIndex(), p);
+    const double radial = std::hypot((p[0] - v.centre[0]) / 20, (p[1] - v.centre[1]) / 15);
+    const double dz = p[2] - v.centre[2];
+    float label = 0;
+    if (radial <= 1 && std::abs(dz) <= 12.5) label = 31;
+    else if (radial <= 1 && std::abs(dz) > 12.5 && std::abs(dz) <= 22.5) label = 200;
+    it.Set(label);
+  }
+  const std::filesystem::path dir = std::filesystem::path(CEMENTSPH_BINARY_DIR) / "Testing" / "vertebra-labels";
+  std::filesystem::create_directories(dir);
+  imaging::writeVolume(labels, (dir / "labels.nrrd").string());
+  const json table = {{"vertebrae", {31}}, {"disc", {200}}};
+
+  auto withLabels = [&](scene::SceneConfig s) {
+    s.labelsPath = (dir / "labels.nrrd").string();
+    s.labelTable = table;
+    return s;
+  };
+  try {
+    scene::runInjection(v.phantom.ct, withLabels(sceneAt(v.disc, 0.05)), {});
+    ADD_FAILURE() << "no refusal for a tip in the labelled disc";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("intervertebral disc"), std::string::npos) << e.what();
+  }
+  const auto r = scene::runInjection(v.phantom.ct, withLabels(sceneAt(v.fat, 0.2)), {});
+  EXPECT_NE(r.metrics.at("leak_rule").get<std::string>().find("labels"), std::string::npos) << r.metrics.at("leak_rule");
+  EXPECT_EQ(r.metrics.at("leakage_volume_ml").get<double>(), 0.0) << r.metrics.at("leakage_sites").dump();
+
+  // On another grid: one line naming the file.
+  auto shifted = imaging::ImageType::New();
+  shifted->CopyInformation(labels);
+  auto origin = labels->GetOrigin();
+  origin[0] += 1.0;
+  shifted->SetOrigin(origin);
+  shifted->SetRegions(labels->GetLargestPossibleRegion());
+  shifted->Allocate();
+  shifted->FillBuffer(0);
+  imaging::writeVolume(shifted, (dir / "shifted.nrrd").string());
+  auto s = sceneAt(v.fat, 0.05);
+  s.labelsPath = (dir / "shifted.nrrd").string();
+  try {
+    scene::runInjection(v.phantom.ct, s, {});
+    ADD_FAILURE() << "a label map on another grid was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("shifted.nrrd"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not on the CT's grid"), std::string::npos) << e.what();
+  }
 }

@@ -173,6 +173,21 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   setup.model = modelParameters(preset, scene);
   const BoneChoice bone = chooseBone(ct, scene);
   setup.continuum = bone.model == "continuum";
+  // A label map (labels_path): on the CT's own grid, oriented as the CT is (an exact reorientation moves no
+  // label; an oblique resampling would blend them, so it is refused).
+  imaging::ImageType::ConstPointer labels;
+  if (!scene.labelsPath.empty()) {
+    const auto raw = imaging::readVolume(scene.labelsPath);
+    if (!imaging::geometryOf(raw).sameGrid(imaging::geometryOf(input)))
+      throw std::invalid_argument("scene: labels_path " + scene.labelsPath +
+                                  ": the label map is not on the CT's grid (size, origin, spacing, direction); export "
+                                  "it on the CT's grid (TotalSegmentator and 3D Slicer do)");
+    if (!isAxisAligned(input) && !axisPermutation(input))
+      throw std::invalid_argument("scene: labels_path with an oblique CT: labels cannot be resampled without blending "
+                                  "them; resample the CT and its labels onto an axial grid first (nearest neighbour)");
+    labels = axisAligned(raw);
+    setup.labels = labels.GetPointer();
+  }
 
   PorousSolidOptions po;
   po.thresholdHu = setup.continuum ? scene.bone.corticalHu : scene.thresholdHu; // continuum: only cortex is solid

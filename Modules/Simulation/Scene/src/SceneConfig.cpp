@@ -209,6 +209,13 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "allow_tip_outside_bone") {
       if (!v.is_boolean()) fail(key, "must be true or false");
       s.allowTipOutsideBone = v.get<bool>();
+    } else if (key == "labels_path") {
+      if (!v.is_string() || v.get_ref<const std::string&>().empty() || v.get_ref<const std::string&>().size() > 4096)
+        fail(key, "must be the path of a label map (a non-empty string)");
+      s.labelsPath = v.get<std::string>();
+    } else if (key == "label_table") {
+      if (!v.is_object()) fail(key, "must be an object of class -> [labels] (README, \"Your own CT\")");
+      s.labelTable = v;
     } else if (key == "second_tip_withdrawal_mm") s.secondTipWithdrawalMm = number(v, key);
     else if (key == "second_tip_volume_ml") s.secondTipVolumeMl = number(v, key);
     else if (key == "cannula_gauge") {
@@ -475,6 +482,8 @@ json toJson(const SceneConfig& s) {
   j["soft_tissue_permeability_m2"] = s.bone.softTissuePermeabilityM2;
   j["stop_at_first_leak"] = s.stopAtFirstLeak;
   j["allow_tip_outside_bone"] = s.allowTipOutsideBone;
+  if (!s.labelsPath.empty()) j["labels_path"] = s.labelsPath;
+  if (!s.labelTable.is_null()) j["label_table"] = s.labelTable;
   if (s.secondTipWithdrawalMm) {
     j["second_tip_withdrawal_mm"] = *s.secondTipWithdrawalMm;
     j["second_tip_volume_ml"] = s.secondTipVolumeMl;

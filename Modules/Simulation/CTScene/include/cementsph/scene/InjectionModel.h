@@ -122,6 +122,7 @@ struct InjectionSetup {
   const PorousSolid* solid = nullptr;
   const ModelChoice* choice = nullptr;
   bool continuum = false;                      // bone as a continuum from HU (BoneCalibration.h)
+  const imaging::ImageType* labels = nullptr;  // the scene's label map on `ct`'s grid (labels_path), or null
 };
 
 class InjectionModel {

@@ -222,7 +222,7 @@ public:
     if (continuum_) {
       // Which tissue each voxel is (Modules/Simulation/Anatomy): the target vertebra closed over its marrow,
       // disc, canal, vessel, ...; cement outside the target is leakage. The tip must be in the target.
-      classifyTissues(*in.ct, solid, scene);
+      classifyTissues(*in.ct, in.labels, solid, scene);
       // Each voxel's porosity and permeability from its HU (BoneCalibration.h). Marrow fat inside the target
       // (below soft_tissue_max_hu, enclosed by cortex) is bone at its most porous, not an open leak path.
       const auto start = in.ct->GetLargestPossibleRegion().GetIndex();
@@ -429,7 +429,8 @@ private:
   // the tip (a vertebra is larger than the region of interest, and the rule needs its whole shell), and the
   // region takes its voxels' classes. Where no walled vertebra is found around the tip (a block of bone, a
   // synthetic half-space), the HU rule stays: cement in voxels below soft_tissue_max_hu is leakage.
-  void classifyTissues(const imaging::ImageType& ct, const PorousSolid& solid, const SceneConfig& scene) {
+  void classifyTissues(const imaging::ImageType& ct, const imaging::ImageType* labelMap, const PorousSolid& solid,
+                       const SceneConfig& scene) {
     const std::size_t n = solid.grid.count();
     leak_.assign(n, 0);
     const auto region = ct.GetLargestPossibleRegion();
@@ -451,6 +452,7 @@ private:
     }
     anatomy::Grid grid;
     std::vector<float> hu;
+    std::vector<std::int32_t> labels;
     hu.reserve(std::size_t(count[0] * count[1] * count[2]));
     for (unsigned a = 0; a < 3; ++a) {
       grid.size[a] = int(count[a]);
@@ -466,13 +468,27 @@ private:
           idx[1] = region.GetIndex()[1] + lo[1] + j;
           idx[2] = region.GetIndex()[2] + lo[2] + k;
           hu.push_back(ct.GetPixel(idx));
+          if (labelMap) labels.push_back(std::int32_t(std::lround(labelMap->GetPixel(idx))));
         }
     anatomy::AnatomyOptions options;
     options.softTissueMaxHu = scene.bone.softTissueMaxHu;
     options.corticalHu = scene.bone.corticalHu;
     const std::array<double, 3> tip{tipMm.x(), tipMm.y(), tipMm.z()};
-    anatomy::Anatomy cube = anatomy::classifyAnatomyFromCT(hu.data(), grid, tip, options);
-    if (!cube.targetFound) {
+    anatomy::Anatomy cube;
+    if (labelMap) {
+      anatomy::LabelTable table = anatomy::LabelTable::totalSegmentator();
+      if (!scene.labelTable.is_null()) {
+        try {
+          table = anatomy::LabelTable::fromJson(scene.labelTable);
+        } catch (const std::exception& e) {
+          throw std::invalid_argument(std::string("scene: label_table: ") + e.what());
+        }
+      }
+      cube = anatomy::classifyAnatomyFromLabels(hu.data(), labels.data(), grid, tip, table, options);
+    } else {
+      cube = anatomy::classifyAnatomyFromCT(hu.data(), grid, tip, options);
+    }
+    if (!cube.targetFound && !labelMap) {
       leakRule_ = "hu: cement below soft_tissue_max_hu is leakage (no vertebra walled by cortex around the tip: " +
                   cube.description + ")";
       for (std::size_t c = 0; c < n; ++c) {

@@ -66,6 +66,11 @@
 //                                   vertebra (Modules/Simulation/Anatomy)                        false
 //   allow_tip_outside_bone (bool)   continuum: run although the tip is in disc, canal, vessel, soft tissue
 //                                   or air (a deliberate injection there); otherwise refused     false
+//   labels_path                     continuum: a label map on the CT's grid (e.g. TotalSegmentator's output or
+//                                   a 3D Slicer segmentation) for the tissue classes instead of the CT bone
+//                                   rule (`inject --labels`)                                      none
+//   label_table (object)            which labels are vertebrae, target_vertebra, bone, disc, canal, vessel,
+//                                   air, soft_tissue (VertebraAnatomy.h)        TotalSegmentator's "total"
 //   second_tip_withdrawal_mm, second_tip_volume_ml   voxel-darcy: a second tip on the same trajectory (the
 //                                   two-depth technique): once volume_ml - second_tip_volume_ml is in, the
 //                                   cannula is withdrawn this far along its axis (the tract it leaves opens to
@@ -136,6 +141,8 @@ struct SceneConfig {
   BoneCalibration bone;
   bool stopAtFirstLeak = false;
   bool allowTipOutsideBone = false;
+  std::string labelsPath;              // a label map on the CT's grid (NIfTI, NRRD, ...); empty: the CT bone rule
+  nlohmann::json labelTable;           // which labels are which tissue (LabelTable::fromJson); null: TotalSegmentator
   std::optional<double> secondTipWithdrawalMm; // a second tip this far back along the axis; none: one tip
   double secondTipVolumeMl = 0.0;              // of volume_ml, injected at the second tip
   double curingFactor(double timeSinceInjectionStartS) const;
