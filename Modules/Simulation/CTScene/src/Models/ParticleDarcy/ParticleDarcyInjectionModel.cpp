@@ -177,6 +177,7 @@ public:
           if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p)) candidates_.push_back(p);
         }
     if (seeds_.empty()) throw std::invalid_argument("scene: the outlet ball holds no open lattice site");
+    closedColour();
     {
       const int m = int(std::ceil(kernel_.support / d_));
       latticeNumber_ = 0;
@@ -347,6 +348,34 @@ private:
         }
   }
 
+  // The closed space's share of the colour function at each open voxel, sum_c V_c W(x - x_c) over the closed
+  // voxels and the space outside the region (static: the closed set does not change), so that cement
+  // against a wall reads C = 1 and is not taken for open space.
+  void closedColour() {
+    const sph::VoxelGrid& g = solid_->grid;
+    const double cs = kernel_.support, vc = g.voxelVolume();
+    int m[3];
+    for (int a = 0; a < 3; ++a) m[a] = int(std::floor(cs / g.spacing[a]));
+    closedColour_.assign(g.count(), 0.0f);
+    for (int k = 0; k < g.size[2]; ++k)
+      for (int j = 0; j < g.size[1]; ++j)
+        for (int i = 0; i < g.size[0]; ++i) {
+          const std::size_t v = g.index(i, j, k);
+          if (closed_[v]) continue;
+          double c = 0;
+          for (int dk = -m[2]; dk <= m[2]; ++dk)
+            for (int dj = -m[1]; dj <= m[1]; ++dj)
+              for (int di = -m[0]; di <= m[0]; ++di) {
+                const int x = i + di, y = j + dj, z = k + dk;
+                const bool inside = x >= 0 && y >= 0 && z >= 0 && x < g.size[0] && y < g.size[1] && z < g.size[2];
+                if (inside && !closed_[g.index(x, y, z)]) continue;
+                const double r2 = Eigen::Vector3d(di * g.spacing[0], dj * g.spacing[1], dk * g.spacing[2]).squaredNorm();
+                if (r2 < cs * cs) c += vc * kernel_.w(std::sqrt(r2));
+              }
+          closedColour_[v] = float(c);
+        }
+  }
+
   void add(const Eigen::Vector3d& p, double pressure) {
     x_.push_back(p);
     p_.push_back(pressure);
@@ -415,7 +444,10 @@ private:
             if (const double r2 = (g.centre(i, j, k) - p).squaredNorm(); r2 < cs * cs)
               colour_[g.index(i, j, k)] += float(volume_ * kernel_.w(std::sqrt(r2)));
     }
-    for (std::size_t c = 0; c < g.count(); ++c) occupied_[c] = colour_[c] >= 0.5f;
+    for (std::size_t c = 0; c < g.count(); ++c) {
+      colour_[c] += closedColour_[c];
+      occupied_[c] = colour_[c] >= 0.5f;
+    }
     auto stamp = [&](const Eigen::Vector3d& p, double radius) {
       int lo[3], hi[3];
       for (int a = 0; a < 3; ++a) {
@@ -437,7 +469,10 @@ private:
     for (std::size_t q = 0; q < pairI_.size(); ++q) number[std::size_t(pairI_[q])] += pairW_[q], number[std::size_t(pairJ_[q])] += pairW_[q];
     const double vc = g.voxelVolume();
     std::vector<double> colourAt(n);
-    for (std::size_t i = 0; i < n; ++i) colourAt[i] = volume_ * number[i]; // C at the particle, particles only
+    for (std::size_t i = 0; i < n; ++i) { // C at the particle: the particles' and the closed space's
+      const long v = voxel(x_[i]);
+      colourAt[i] = volume_ * number[i] + (v >= 0 ? double(closedColour_[std::size_t(v)]) : 0.0);
+    }
     ghostPull_.assign(n, Eigen::Vector3d::Zero());
     frontParticles_ = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -673,7 +708,7 @@ private:
   Eigen::Vector3d tip_, axis_, lower_;
   std::optional<sph::ViscositySchedule> viscosity_;
   std::vector<std::uint8_t> closed_, occupied_;
-  std::vector<float> colour_;
+  std::vector<float> colour_, closedColour_;
   std::size_t shaftVoxels_ = 0, steps_ = 0, frontParticles_ = 0;
   std::vector<Eigen::Vector3d> seeds_, candidates_;
   int cells_[3] = {1, 1, 1};
