@@ -41,9 +41,10 @@ launcher=""
 if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
 {
   echo "CXX := $launcher$cxx"
-  echo "CXXFLAGS := -std=c++17 -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined -fopenmp -MMD -MP $includes"
+  # fuzzer-no-link: coverage instrumentation in the code under test too, or libFuzzer sees only the target
+  echo "CXXFLAGS := -std=c++17 -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=undefined -fopenmp -MMD -MP $includes"
   echo "CXXFLAGS += -DCEMENTSPH_TEST_DATA_DIR=\\\"$here/Data\\\" -DCEMENTSPH_BINARY_DIR=\\\"$out\\\""
-  echo "LDFLAGS := -fsanitize=address,undefined -fopenmp"
+  echo "LDFLAGS := -fsanitize=address,undefined,fuzzer-no-link -fopenmp"
   echo "SRC := $here"
   objs=""
   for s in $sph_src; do o="obj/${s//\//_}.o"; objs="$objs $o"; echo "$o: \$(SRC)/$s"; echo "	\$(CXX) \$(CXXFLAGS) -c \$< -o \$@"; done
@@ -55,7 +56,7 @@ if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
   for f in $fuzzers; do
     all="$all bin/$f"
     echo "obj/fuzz_$f.o: \$(SRC)/Testing/Fuzz/targets/$f.cxx"
-    echo "	\$(CXX) \$(CXXFLAGS) -fsanitize=fuzzer-no-link -c \$< -o \$@"
+    echo "	\$(CXX) \$(CXXFLAGS) -c \$< -o \$@"
     deps="obj/fuzz_$f.o"
     if [ "$f" = scene_json ]; then deps="$deps lib/libcore.a"; else deps="$deps obj/VolumeFileChecks.o"; fi
     echo "bin/$f: $deps"
