@@ -15,20 +15,31 @@
 //    the cement's volume is the count times that, exact; the emitted volume is inserted one particle at a
 //    time as it accumulates.
 //  * Kernel: Wendland C2 (Wendland 1995), h = 1.5 d, support 2h; F(r) = -dW/dr >= 0.
+//  * Each particle's space volume Omega_i = d^3 n0 / n_i from its number density n_i = sum_j W_ij completed by
+//    the closed voxels and the open space about it (n0: a full lattice's), so Omega_i = d^3 on a regular
+//    packing and the operators below stay consistent where the packing is not.
 //  * Pressure: -div(M grad p) = s with the symmetric pairwise Laplacian of Brookshaw 1985 (Proc. ASA 6:207)
 //    / Cleary & Monaghan 1999 (J Comput Phys 148:227): A_ii = sum_j w_ij + g_i, A_ij = -w_ij,
-//    w_ij = 2 V_i V_j M_ij F(r_ij) / r_ij (M_ij the harmonic mean of the mobilities, V the particles' space
-//    volume d^3), b_i = Q_i. Symmetric positive definite: Eigen's ConjugateGradient (Jacobi), warm-started.
-//  * The free surface needs no threshold on a particle indicator: g_i is the part of particle i's support
-//    that falls on OPEN pore space not occupied by cement (the CT's pore voxels farther than 0.9 d from every
-//    particle: a near-lattice covers every interior point within sqrt(3)/2 d), each such voxel a ghost at
-//    p = 0 (a ghost-fluid Dirichlet condition as the voxel model's, Gibou et al. 2002). Interior particles
-//    have g_i = 0 exactly; a void that opens inside the cement becomes open space at p = 0 and draws cement
-//    into it. Solid voxels and the region's sides contribute nothing (no flux, a Neumann condition), so no
-//    pressure drives cement into solid.
+//    w_ij = 2 Omega_i Omega_j M_ij F(r_ij) / r_ij (M_ij the harmonic mean of the mobilities: one M in a
+//    pore-resolved medium), b_i = Q_i + (d^3 - Omega_i) / tau: the density-invariant term of Shao & Lo 2003
+//    (Adv Water Resour 26:787) relaxing each particle's volume to d^3 over tau = 4 steps (without it the
+//    projection's divergence error let the cloud expand to 0.4 of its density). Symmetric positive
+//    definite: a Jacobi-preconditioned conjugate gradient, matrix-free over the pairs, warm-started,
+//    single-threaded (deterministic; Eigen's OpenMP product was 200x slower on a loaded 2-core machine).
+//  * The free surface needs no threshold on a particle indicator: open space is every pore voxel where the
+//    colour function C(x) = sum_j d^3 W(x - x_j) + (the closed voxels' share) is below 1/2 (on a lattice the
+//    level 1/2 lies half a spacing beyond the last particles; a missing particle lowers C by 0.12 only; the
+//    closed share keeps cement against a wall at C = 1). g_i is the part of particle i's support on open
+//    space, each such voxel a ghost at p = 0 placed by the ghost-fluid rule (Gibou et al. 2002, J Comput
+//    Phys 176:205, as the voxel model's front): the surface lies theta = (C_i - 1/2)/(C_i - C_g) of the way to
+//    the ghost, its weight 2 Omega_i V_c M F/r / theta (theta >= 0.2). Interior particles have g_i = 0
+//    exactly; a void that opens inside the cement becomes open space at p = 0 and draws cement into it.
+//    Solid voxels and the region's sides contribute nothing (no flux, a Neumann condition), so no pressure
+//    drives cement into solid.
 //  * Velocity: u_i = -(M_i / phi) grad p_i with the corrected (renormalised) gradient of Bonet & Lok 1999
-//    (Comput Methods Appl Mech Eng 180:97), grad p_i = B_i^-1 sum_j V_j (F/r)(p_j - p_i)(x_j - x_i),
-//    B_i = sum_j V_j (F/r)(x_j - x_i)(x_j - x_i)^T, over the cement and the same p = 0 ghosts.
+//    (Comput Methods Appl Mech Eng 180:97), grad p_i = B_i^-1 sum_j Omega_j (F/r)(p_j - p_i)(x_j - x_i),
+//    B_i = sum_j Omega_j (F/r)(x_j - x_i)(x_j - x_i)^T, over the cement and the same ghosts (their p by the
+//    ghost-fluid rule).
 //  * No penetration: a particle never steps into a closed voxel (solid, the cannula's shaft, outside the
 //    region): its step is taken axis by axis and a component that would cross into one is dropped.
 //  * The outlet (the cannula as a flux inlet, the voxel model's source ball): the flow rate Q is spread over
@@ -40,7 +51,7 @@
 //    gap (the farthest candidate point, on a d/2 lattice, from every particle) once the emitted volume holds
 //    one particle's; the first ones fill the ball's lattice sites nearest the tip.
 //  * Particle shifting (Lind et al. 2012, J Comput Phys 231:1499, Eqs. 9, 13): dr_s = -D grad C_i,
-//    D = A h |u_i| dt (A = 2), grad C_i = sum_j V_j (1 + 0.2 (W_ij / W(d))^4) grad W_ij, with closed voxels
+//    D = A h |u_i| dt (A = 2), grad C_i = sum_j Omega_j (1 + 0.2 (W_ij / W(d))^4) grad W_ij, with closed voxels
 //    counted as occupied (no pull toward walls) and, for a particle with open space in its support, the
 //    component normal to the free surface removed (Lind's free-surface rule); at most 0.1 d a step; never
 //    into a closed voxel.
