@@ -201,7 +201,12 @@ int runCompare(const CompareRequest& a) {
   metrics["cement_threshold_hu"] = ct.segmentation.thresholdHU;
   metrics["mean_spreading_distance_mm"] = ct.spreadingMm;
   metrics["ct"] = cementJson(ct);
-  if (!ct.found()) warnings.push_back("no cement found in the post-injection CT");
+  // A comparison without cement in the post scan has nothing to compare: no output (issue "Trust, round
+  // two", item 3), one line saying what to check.
+  if (!ct.found())
+    throw std::invalid_argument("--post " + a.post + ": no cement found in the post-injection CT at the injection "
+                                "point (is it the pre scan again? check --post, --injection-point-mm, or give "
+                                "--threshold-hu)");
 
   std::optional<sm::SurfaceComparison> surfaces;
   if (sim) {

@@ -15,9 +15,11 @@
 #include "cementsph/rendering/XYPlot.h"
 #include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneConfig.h"
+#include "cementsph/sph/Simulation.h"
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -105,6 +107,13 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
         },
         &farm);
     if (!farm.coordinator()) return 0; // a worker: its starts went to rank 0
+    // A plan none of whose injections ran is no plan: a failed run, nothing written.
+    if (std::all_of(plan.evaluations.begin(), plan.evaluations.end(),
+                    [](const planning::PlanEvaluation& e) { return !e.failure.empty(); }))
+      throw sph::SimulationError("every one of the " + std::to_string(plan.evaluations.size()) +
+                                 " injections failed (the first: " +
+                                 (plan.evaluations.empty() ? std::string("none ran") : plan.evaluations.front().failure) +
+                                 "); no plan written: check the trajectory and the scene");
     const fs::path out(a->out);
     fs::create_directories(out);
     nlohmann::json planJson = plan.toJson(r);

@@ -51,6 +51,24 @@ void capThreadsOption(CLI::App& sub) {
       "", "cap at the cores"));
 }
 
+// Every floating-point option of every subcommand takes finite numbers only: CLI11's ranges let NaN through (a
+// comparison with NaN is false), and a NaN or infinite radius, threshold or time must never reach the modules
+// (`compare --injection-search-radius-mm nan` once wrote a cement volume of 0).
+void requireFiniteNumbers(CLI::App& sub) {
+  for (CLI::Option* option : sub.get_options()) {
+    if (option->get_type_name().find("FLOAT") == std::string::npos) continue;
+    option->check(CLI::Validator(
+        [](std::string& value) -> std::string {
+          char* end = nullptr;
+          const double x = std::strtod(value.c_str(), &end);
+          if (end != value.c_str() && !std::isfinite(x))
+            return "must be a finite number (got '" + value.substr(0, 40) + "')";
+          return {};
+        },
+        "", "finite"));
+  }
+}
+
 } // namespace
 
 std::vector<Command>& CommandRegistry::commands() {
@@ -131,6 +149,7 @@ int main(int argc, char** argv) {
     CLI::App* sub = app.add_subcommand(command.name, command.summary);
     runners[sub] = command.setup(*sub);
     capThreadsOption(*sub);
+    requireFiniteNumbers(*sub);
     if (!sub->get_option_no_throw("--quiet"))
       sub->add_flag("--quiet", quiet, "Print nothing but errors (the files are written as usual)");
   }

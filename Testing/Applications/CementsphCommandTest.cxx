@@ -123,3 +123,22 @@ TEST(CementsphCommand, AMisspeltRenderBackendIsRefusedBeforeAnyWork) {
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_FALSE(fs::exists(out / "permeability.csv"));
 }
+
+// A floating-point option takes finite numbers only, on every subcommand (CLI11's ranges let NaN through).
+TEST(CementsphCommand, NaNAndInfiniteNumbersAreRefusedOnEveryOption) {
+  for (const auto& [args, option] : std::vector<std::pair<std::string, std::string>>{
+           {"compare --pre a.nrrd --post b.nrrd --injection-point-mm 1,2,3 --injection-search-radius-mm nan --out x",
+            "--injection-search-radius-mm"},
+           {"compare --pre a.nrrd --post b.nrrd --injection-point-mm 1,2,3 --closing-radius-mm inf --out x",
+            "--closing-radius-mm"},
+           {"inject --ct a.nrrd --scene s.json --tip-mm 1,nan,3 --out x", "--tip-mm"},
+           {"viscosity --viscosity-pa-s 1e999", "--viscosity-pa-s"},
+           {"plan --ct a.nrrd --scene s.json --out x --entry-mm 0,0,0 --direction 0,0,1 --target-mm 0,0,5 "
+            "--target-radius-mm -inf",
+            "--target-radius-mm"}}) {
+    const Result r = run(args);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(option + ": must be a finite number"), std::string::npos) << args << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  }
+}

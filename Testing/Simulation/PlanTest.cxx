@@ -9,6 +9,8 @@
 #include "cementsph/planning/InjectionPlanner.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkPointData.h>
@@ -158,4 +160,20 @@ TEST(Plan, TheObjectiveValuesLessCementAtTheSameCoverage) {
   EXPECT_NEAR(small, 0.928 - 0.0298, 1e-12);
   EXPECT_NEAR(cementsph::planning::planObjective(r, 0.928, 2.98, 1.0, 0.15), small - 5.0, 1e-12);
   EXPECT_NEAR(cementsph::planning::planObjective(r, 0.928, 2.98, 3.3, 0.0), small - 5.0 * 0.1, 1e-12);
+}
+
+// A trajectory in the soft tissue beside the vertebra: every tip is outside bone and refused, so no injection
+// runs and no plan is written (status 2, one line; the output folder is not created).
+TEST(Plan, APlanWithNoInjectionThatRanWritesNothing) {
+  const fs::path out = scratch("plan-none-ran");
+  const auto r = cementsph::testing::runProgram(
+      CEMENTSPH_EXECUTABLE,
+      {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
+       "--entry-mm", "5,4,22.5", "--direction", "0,1,0", "--min-depth-mm", "1", "--max-depth-mm", "4",
+       "--target-mm", "5,7,22.5", "--target-radius-mm", "2", "--min-volume-ml", "0.5", "--max-volume-ml", "1",
+       "--max-evaluations", "6", "--starts", "1", "--quiet", "--out", out.string()});
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_NE(r.err.find("injections failed"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
