@@ -145,6 +145,36 @@ imaging::MaskType::Pointer labelsOnInputGrid(const imaging::ImageType* input, co
   return map;
 }
 
+// Cement in the outermost voxels of the region: where that face is the scan's edge the cement may go on beyond
+// what the CT shows; elsewhere the region (roi_size_mm) cut it. Either is a warning (and a plan limit).
+void edgeWarnings(const imaging::ImageType& ct, const PorousSolid& solid, const std::vector<double>& density,
+                  InjectionSummary& s) {
+  const auto size = ct.GetLargestPossibleRegion().GetSize();
+  const std::array<int, 3> n = solid.grid.size;
+  bool scanEdge = false, regionEdge = false;
+  for (int a = 0; a < 3 && !(scanEdge && regionEdge); ++a)
+    for (int side = 0; side < 2; ++side) {
+      const int layer = side == 0 ? 0 : n[std::size_t(a)] - 1;
+      const bool atScan = side == 0 ? solid.roiStart[std::size_t(a)] == 0
+                                    : solid.roiStart[std::size_t(a)] + solid.roiSize[std::size_t(a)] == long(size[unsigned(a)]);
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      bool cement = false;
+      for (int j = 0; j < n[std::size_t(b)] && !cement; ++j)
+        for (int k = 0; k < n[std::size_t(c)] && !cement; ++k) {
+          std::array<int, 3> ijk{};
+          ijk[std::size_t(a)] = layer, ijk[std::size_t(b)] = j, ijk[std::size_t(c)] = k;
+          cement = density[solid.grid.index(ijk[0], ijk[1], ijk[2])] > 0;
+        }
+      if (cement) (atScan ? scanEdge : regionEdge) = true;
+    }
+  if (scanEdge)
+    s.warnings.push_back("the cement reached the edge of the scan: it may go on where the CT does not show "
+                         "(a larger field of view, or less cement)");
+  if (regionEdge)
+    s.warnings.push_back("the cement reached the edge of the region of interest: the result is cut there "
+                         "(a larger roi_size_mm)");
+}
+
 // The path of the first number in j that is NaN or infinite ("" if none).
 std::string firstNonFinite(const nlohmann::json& j, const std::string& path = "") {
   if (j.is_number_float()) return std::isfinite(j.get<double>()) ? "" : path;
@@ -276,6 +306,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   summarisePressures(result.tipSeries, s);
   s.volumeHistory.push_back(volumeRecord()); // the final state
   model->report(s, result.engineFigures);
+  edgeWarnings(*ct, solid, model->cementDensity(), s);
   for (const std::string& w : s.warnings) std::cerr << "inject: warning: " << w << "\n";
 
   result.particles = model->cement();

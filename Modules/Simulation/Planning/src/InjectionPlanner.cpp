@@ -91,6 +91,13 @@ double evaluate(unsigned, const double* x, double*, void* data) {
     e.leakageMl = run.summary.leakageVolumeMl;
     e.withinLimits = e.syringeMpa <= r.maxSyringeMpa && e.leakageMl <= r.maxLeakageMl;
     e.objective = planObjective(r, e.coverage, x[1], e.syringeMpa, e.leakageMl);
+    // Cement at the scan's or the region's edge: the injection is not fully seen, so the plan is outside its limits.
+    for (const std::string& w : run.summary.warnings)
+      if (w.find("reached the edge") != std::string::npos) {
+        e.withinLimits = false;
+        e.objective -= 5.0;
+        e.warnings.push_back(w);
+      }
   } catch (const std::exception& ex) {
     e.failure = ex.what();
     e.objective = -1.0;
@@ -154,6 +161,7 @@ PlanEvaluation evaluationFromJson(const nlohmann::json& j) {
     e.secondTipMm = Eigen::Vector3d(second[0].get<double>(), second[1].get<double>(), second[2].get<double>());
   }
   e.failure = j.at("failure").is_null() ? std::string() : j.at("failure").get<std::string>();
+  e.warnings = j.at("warnings").get<std::vector<std::string>>();
   return e;
 }
 } // namespace
@@ -266,7 +274,8 @@ nlohmann::json PlanEvaluation::toJson() const {
           {"second_tip_volume_ml", secondTip ? nlohmann::json(secondVolumeMl) : nlohmann::json(nullptr)},
           {"second_tip_mm", secondTip ? nlohmann::json{secondTipMm.x(), secondTipMm.y(), secondTipMm.z()}
                                       : nlohmann::json(nullptr)},
-          {"failure", failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure)}};
+          {"failure", failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure)},
+          {"warnings", warnings}};
 }
 
 nlohmann::json PlanResult::toJson(const PlanRequest& r) const {

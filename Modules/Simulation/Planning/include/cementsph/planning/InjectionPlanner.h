@@ -12,7 +12,8 @@
 // ml of cement is worth it only if it covers at least one more percent of the target, so of two plans with the
 // same coverage the one with less cement wins (less cement, less leakage risk and heat). Leakage is the
 // injection's (cement outside the target vertebra where the anatomy is known: Modules/Simulation/Anatomy). A
-// plan whose injection cannot run (a tip in cortex, outside bone, outside the CT) scores -1 and says why.
+// plan whose injection cannot run (a tip in cortex, outside bone, outside the CT) scores -1 and says why; one
+// whose cement reaches the scan's or the region's edge is outside the limits (objective - 5) and says so.
 //
 // A second tip (secondTip): the two-depth technique on one trajectory. The cement goes in at depth d, then
 // the cannula is withdrawn to d2 = d_min + t (d - d_min), t in [0, 0.9], and the last share s in
@@ -77,6 +78,7 @@ struct PlanEvaluation {
   double coverage = 0, syringeMpa = 0, leakageMl = 0, objective = -1;
   bool withinLimits = false;
   std::string failure; // why the injection could not run (empty when it ran)
+  std::vector<std::string> warnings; // the injection's edge warnings (each a limit: objective - 5)
   nlohmann::json toJson() const;
 };
 
