@@ -1,7 +1,11 @@
 // writeDicomSeries: one int16 CT slice per file with the geometry in Image Position / Orientation
 // Patient, following ITK's ResampleDICOM example (per-slice dictionaries, one study/series UID).
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/LibraryMessages.h"
+
+#include <sys/resource.h>
+#include <sys/statvfs.h>
 
 #include <itkGDCMImageIO.h>
 #include <itkImageRegionConstIterator.h>
@@ -95,6 +99,26 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
     char name[32];
     std::snprintf(name, sizeof name, "slice%04u.dcm", z);
     files[z] = (fs::path(directory) / name).string();
+  }
+
+  // GDCM asserts (SIGABRT) when a write fails part way, e.g. on a full filesystem or past the file size limit,
+  // before ITK can turn it into an exception: check the room first (the slices' pixels plus 4 kB of header
+  // each, with 10 % to spare), so the common case is one line instead of a signal.
+  {
+    const std::uintmax_t sliceBytes = std::uintmax_t(size[0]) * size[1] * 2 + 4096;
+    const std::uintmax_t needed = sliceBytes * size[2] + sliceBytes * size[2] / 10;
+    struct statvfs fsInfo {};
+    if (statvfs(directory.c_str(), &fsInfo) == 0) {
+      const std::uintmax_t available = std::uintmax_t(fsInfo.f_bavail) * fsInfo.f_frsize;
+      if (available < needed)
+        throw OutputError(directory + ": not enough room for the DICOM series (" + std::to_string(needed >> 20) +
+                          " MB needed, " + std::to_string(available >> 20) + " MB free); free some space or write "
+                          "elsewhere");
+    }
+    struct rlimit limit {};
+    if (getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && limit.rlim_cur < sliceBytes)
+      throw OutputError(directory + ": a DICOM slice (" + std::to_string(sliceBytes) +
+                        " bytes) is over the file size limit (ulimit -f); raise it");
   }
 
   auto io = itk::GDCMImageIO::New();
