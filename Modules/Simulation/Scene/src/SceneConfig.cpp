@@ -481,7 +481,7 @@ json toJson(const SceneConfig& s) {
   j["soft_tissue_max_hu"] = s.bone.softTissueMaxHu;
   j["soft_tissue_permeability_m2"] = s.bone.softTissuePermeabilityM2;
   j["stop_at_first_leak"] = s.stopAtFirstLeak;
-  j["allow_tip_outside_bone"] = s.allowTipOutsideBone;
+  if (s.allowTipOutsideBone) j["allow_tip_outside_bone"] = true; // only when set: recorded scenes stay as they were
   if (!s.labelsPath.empty()) j["labels_path"] = s.labelsPath;
   if (!s.labelTable.is_null()) j["label_table"] = s.labelTable;
   if (s.secondTipWithdrawalMm) {
