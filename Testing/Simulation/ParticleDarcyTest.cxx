@@ -32,18 +32,8 @@ using namespace cementsph::scene;
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-imaging::ImageType::Pointer uniform(int n, double spacingMm) {
-  auto img = imaging::ImageType::New();
-  imaging::ImageType::RegionType region;
-  imaging::ImageType::SizeType size;
-  size.Fill(itk::SizeValueType(n));
-  region.SetSize(size);
-  img->SetRegions(region);
-  img->SetSpacing(spacingMm);
-  img->Allocate();
-  img->FillBuffer(-100.f);
-  return img;
-}
+// All pore: -100 HU everywhere.
+imaging::ImageType::Pointer uniform(int n, double spacingMm) { return scene::testing::cube(n, spacingMm, -100.f); }
 
 // 1/r0 = 1/a + int_0^a f(r)^2 / r^2 dr, f the enclosed share of a source of density (1 - (r/a)^2)^2:
 // f(r) = P(r/a) / P(1) with P(x) = x^3/3 - 2 x^5/5 + x^7/7 (closed form of int_0^x (1 - s^2)^2 s^2 ds).

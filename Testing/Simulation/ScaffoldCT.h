@@ -11,7 +11,8 @@ inline bool scaffoldRod(int i, int j, int k, int period = 10, int rod = 3) {
   return (a && b) || (b && c) || (a && c);
 }
 
-inline imaging::ImageType::Pointer scaffold(int n = 40, double spacingMm = 0.5, int period = 10, int rod = 3) {
+// n^3 voxels of spacingMm, origin 0, identity direction, every voxel at hu.
+inline imaging::ImageType::Pointer cube(int n, double spacingMm, float hu) {
   auto img = imaging::ImageType::New();
   imaging::ImageType::RegionType region;
   imaging::ImageType::SizeType size;
@@ -20,6 +21,12 @@ inline imaging::ImageType::Pointer scaffold(int n = 40, double spacingMm = 0.5, 
   img->SetRegions(region);
   img->SetSpacing(spacingMm);
   img->Allocate();
+  img->FillBuffer(hu);
+  return img;
+}
+
+inline imaging::ImageType::Pointer scaffold(int n = 40, double spacingMm = 0.5, int period = 10, int rod = 3) {
+  auto img = cube(n, spacingMm, -100.f);
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) img->SetPixel({{i, j, k}}, scaffoldRod(i, j, k, period, rod) ? 1000.f : -100.f);

@@ -306,15 +306,16 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   summarisePressures(result.tipSeries, s);
   s.volumeHistory.push_back(volumeRecord()); // the final state
   model->report(s, result.engineFigures);
-  edgeWarnings(*ct, solid, model->cementDensity(), s);
+  const std::vector<double> finalDensity = model->cementDensity(); // kg/m^3 per region voxel, at the end
+  edgeWarnings(*ct, solid, finalDensity, s);
   for (const std::string& w : s.warnings) std::cerr << "inject: warning: " << w << "\n";
 
   result.particles = model->cement();
   s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());
-  result.simulatedCt = simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0);
+  result.simulatedCt = simulatedCtOnRoi(ct, solid, finalDensity, hu, rho0);
   result.regionCt = simulatedCtOnRoi(ct, solid, {}, hu, rho0);
-  if (const std::vector<std::uint8_t> labels = model->cementLabels(); !labels.empty())
-    result.cementLabels = labelMapOn(result.simulatedCt, labels);
+  if (const std::vector<std::uint8_t> cementLabels = model->cementLabels(); !cementLabels.empty())
+    result.cementLabels = labelMapOn(result.simulatedCt, cementLabels);
   // The files on the input's own grid unless a crop was asked for (only when files are written: a copy of the
   // whole scan is what a study or a plan does not need).
   if (writer.writing()) {

@@ -59,6 +59,7 @@
 // Published designs read for this: SPlisHSPlasH's DFSPH step (Bender & Koschier 2017), PySPH's ISPH/IISPH
 // (Ihmsen et al. 2014), SPHinXsys's free-surface indicator (Zhang et al.), porous-media ISPH (Shao 2010).
 #include "cementsph/scene/InjectionModel.h"
+#include "../PointArrays.h"
 
 #include "cementsph/sph/HagenPoiseuille.h"
 #include "cementsph/sph/Simulation.h"
@@ -255,13 +256,7 @@ public:
     auto points = vtkSmartPointer<vtkPoints>::New();
     points->SetDataTypeToDouble();
     points->SetNumberOfPoints(n);
-    auto make = [n](const char* name, int components) {
-      auto a = vtkSmartPointer<vtkDoubleArray>::New();
-      a->SetName(name);
-      a->SetNumberOfComponents(components);
-      a->SetNumberOfTuples(n);
-      return a;
-    };
+    auto make = [n](const char* name, int components) { return detail::pointArray(name, components, n); };
     auto pressure = make("pressure_pa", 1), velocity = make("velocity_m_per_s", 3), volume = make("cement_volume_mm3", 1),
          age = make("age_s", 1), density = make("density_kg_per_m3", 1);
     auto verts = vtkSmartPointer<vtkCellArray>::New();

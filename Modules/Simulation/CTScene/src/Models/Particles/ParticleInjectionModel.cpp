@@ -9,6 +9,7 @@
 // mean pressure of the cement the outlet's source feeds (gauge Pa). The simulation box is the ROI: particles
 // leaving it are removed and counted.
 #include "cementsph/scene/InjectionModel.h"
+#include "../PointArrays.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include "cementsph/sph/CannulaEmitter.h"
@@ -34,13 +35,7 @@ vtkSmartPointer<vtkPolyData> particlesToPolyData(const sph::FluidParticles& f, d
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(n);
-  auto make = [n](const char* name, int components) {
-    auto a = vtkSmartPointer<vtkDoubleArray>::New();
-    a->SetName(name);
-    a->SetNumberOfComponents(components);
-    a->SetNumberOfTuples(n);
-    return a;
-  };
+  auto make = [n](const char* name, int components) { return detail::pointArray(name, components, n); };
   auto velocity = make("velocity_m_per_s", 3), density = make("density_kg_per_m3", 1),
        pressure = make("pressure_pa", 1), age = make("age_s", 1), viscosity = make("viscosity_pa_s", 1),
        volumeFraction = make("volume_fraction", 1), front = make("front", 1);
