@@ -143,7 +143,7 @@ TEST(HostileMetaImage, DataFilePatternsThatCrashOrMisreadAreRefused) {
   // one integer come from the file into a format string.
   for (const char* pattern : {"s%02d.raw 1 5 0", "s%02d.raw 1 5 -1", "s%02d.raw 5 1 1", "s%02d.raw 1 5 2",
                               "s%02d.raw 1 9 1", "s%s.raw 1 5 1", "s%02d%d.raw 1 5 1", "s%n%02d.raw 1 5 1",
-                              "s%999d.raw 1 5 1", "s%ld.raw 1 5 1", "s%02d.raw", "s%02d.raw 1 x 1",
+                              "s%999d.raw 1 5 1", "s%2222222222222d.raw 1 5 1", "s%ld.raw 1 5 1", "s%02d.raw", "s%02d.raw 1 x 1",
                               "s%02d.raw 1 99999999999 1", "s%02d.raw 1 5 1 2", "s%02d.raw 1 2000000000 1"})
     expectRefused(metaCase(dir, "p.mhd", "", pattern), "ElementDataFile");
   // A pattern naming a file that is not there.

@@ -273,8 +273,10 @@ std::optional<FilePattern> filePattern(const std::string& format) {
       p.space |= format[j] == ' ';
     }
     std::size_t digits = 0;
+    // At most two width digits are accepted below; stop accumulating past them so a long digit run cannot
+    // overflow the width (UBSan finding of the nrrd_header fuzz target).
     for (; j < format.size() && std::isdigit(static_cast<unsigned char>(format[j])); ++j, ++digits)
-      p.width = p.width * 10 + (format[j] - '0');
+      if (digits < 2) p.width = p.width * 10 + (format[j] - '0');
     if (digits > 2 || j >= format.size() || (format[j] != 'd' && format[j] != 'i')) return std::nullopt;
     if (++conversions > 1) return std::nullopt;
     text = &p.after;
