@@ -257,6 +257,19 @@ TEST(HostileNrrd, Bzip2IsRefusedWithTheReason) {
   expectRefused(dir / "b.nrrd", "bzip2");
 }
 
+TEST(HostileNrrd, ControlBytesInAHeaderLineAreRefused) {
+  // A NUL inside a field would cut the data file's name (and any message naming it) short: "data.raw\0.gz".
+  const fs::path dir = scratch("nrrd-control");
+  writeFile(dir / "data.raw", bytesOf(voxels()));
+  for (const std::string& file : {std::string("data.raw\0\0.gz", 14), std::string("data.raw\x01"), std::string("da\x1bta.raw")}) {
+    writeFile(dir / "c.nhdr", nrrdHeader(kDirections, "raw", file) + "\n");
+    expectRefused(dir / "c.nhdr", "control byte");
+  }
+  // A tab is text: the same header with a tab before the name is read.
+  writeFile(dir / "t.nhdr", nrrdHeader(kDirections, "raw", "\tdata.raw") + "\n");
+  expectValues(dir / "t.nhdr", 0.5);
+}
+
 TEST(HostileNrrd, DataFileListsAndPatterns) {
   const fs::path dir = scratch("nrrd-list");
   const auto v = voxels();
