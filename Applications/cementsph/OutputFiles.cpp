@@ -6,12 +6,37 @@
 #include "cementsph/sph/DarcyBenchmark.h"
 
 #include <algorithm>
+#include <chrono>
+#include <iostream>
 #include <map>
 #include <sstream>
 
 #include <stdexcept>
 
 namespace cementsph::app {
+
+bool PictureSteps::draw(const std::string& name, const std::filesystem::path& png,
+                        const std::function<void(const std::filesystem::path&)>& draw) {
+  try {
+    draw(png);
+    written_.push_back(name);
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "cementsph " << command_ << ": picture " << name << " not written (" << kept_
+              << " are): " << e.what() << "\n";
+    failed_ = true;
+    return false;
+  }
+}
+
+bool PictureSteps::drawAndAnnounce(const std::string& name, const std::filesystem::path& png,
+                                   const std::function<void(const std::filesystem::path&)>& draw) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!this->draw(name, png, draw)) return false;
+  std::cout << "wrote " << png.string() << " ("
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s)\n";
+  return true;
+}
 
 void writeFileAtomically(const std::filesystem::path& path, const std::string& contents) {
   imaging::writeTextAtomically(path.string(), contents);
