@@ -80,12 +80,18 @@ TextHeader readTextHeader(const std::string& path, char separator, const std::st
     }
     if (at == std::string::npos) continue;
     // A header is text: a control byte (a NUL above all) in a field would be cut off or carried into file
-    // names and messages (nrrd_header fuzz finding: "data file: data.raw\0\0.gzz").
-    for (const char c : t)
-      if ((static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == 0x7f)
-        throw std::runtime_error(path + ": header line " + shownValue(t.substr(0, std::min<std::size_t>(at, 40))) +
-                         " holds a control byte (" + std::to_string(int(static_cast<unsigned char>(c))) +
-                         "); a header is text: fix or re-export the file");
+    // names and messages (nrrd_header fuzz finding: "data file: data.raw\0\0.gzz"). A NRRD header is text up
+    // to its blank line, so such a line is refused. In a MetaImage whose ElementDataFile line is missing or
+    // misspelt, reading runs on into LOCAL binary data: a control byte there ends the header (the checks
+    // that follow name the missing key), unless it sits in the ElementDataFile line itself.
+    const bool controlByte = std::any_of(t.begin(), t.end(), [](char c) {
+      return (static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == 0x7f;
+    });
+    if (controlByte) {
+      if (separator != ':' && lower(trim(t.substr(0, at))) != lastKey) break;
+      throw std::runtime_error(path + ": header line " + shownValue(t.substr(0, std::min<std::size_t>(at, 40))) +
+                               " holds a control byte; a header is text: fix or re-export the file");
+    }
     const std::string key = lower(trim(t.substr(0, at)));
     h.fields[key] = trim(t.substr(at + width));
     if (!lastKey.empty() && key == lastKey) {
