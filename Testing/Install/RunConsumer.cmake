@@ -1,16 +1,20 @@
-# ctest script: installs the build tree into a fresh prefix, then configures, builds and runs the
-# consumer project against that prefix only (CMAKE_PREFIX_PATH; the source tree is never named).
-#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DCONSUMER_SOURCE=... -P RunConsumer.cmake
-foreach(var BUILD_DIR WORK_DIR CONSUMER_SOURCE)
+# ctest script, two steps sharing one install:
+#   cmake -DSTEP=install  -DBUILD_DIR=<build tree> -DPREFIX=<dir> -P RunConsumer.cmake
+#     installs the build tree into a fresh PREFIX and checks its layout (one targets file and one include
+#     folder per component) and the installed `cementsph --version`;
+#   cmake -DSTEP=consumer -DPREFIX=<dir> -DGROUP=<sph|imagingio|ctscene|drr|all|unknown> -DCONSUMER_SOURCE=<dir>
+#         -DWORK_DIR=<dir> -P RunConsumer.cmake
+#     configures, builds and runs the consumer project for GROUP against PREFIX only (CMAKE_PREFIX_PATH; the
+#     source tree is never named). GROUP unknown must fail to configure, naming the unknown component.
+foreach(var STEP PREFIX)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "RunConsumer.cmake: ${var} is not set")
   endif()
 endforeach()
-file(REMOVE_RECURSE ${WORK_DIR})
-set(prefix ${WORK_DIR}/prefix)
 
 function(step what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err
+                  WORKING_DIRECTORY ${step_directory})
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
   endif()
@@ -18,21 +22,64 @@ function(step what)
   set(step_output "${out}" PARENT_SCOPE)
 endfunction()
 
-step("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
-foreach(file lib/cmake/CementSPH/CementSPHConfig.cmake lib/cmake/CementSPH/CementSPHTargets.cmake
-             include/cementsph/sph/HagenPoiseuille.h lib/libCementSPH_SPH.a)
-  if(NOT EXISTS ${prefix}/${file})
-    file(GLOB_RECURSE found RELATIVE ${prefix} ${prefix}/*)
-    message(FATAL_ERROR "install did not put ${file} in place; it installed: ${found}")
+if(STEP STREQUAL "install")
+  set(step_directory ${BUILD_DIR})
+  file(REMOVE_RECURSE ${PREFIX})
+  step("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${PREFIX})
+  foreach(file lib/cmake/CementSPH/CementSPHConfig.cmake lib/cmake/CementSPH/CementSPHBuildFlagsTargets.cmake
+               lib/cmake/CementSPH/CementSPHSPHTargets.cmake lib/cmake/CementSPH/CementSPHDRRTargets.cmake
+               include/CementSPH/SPH/cementsph/sph/HagenPoiseuille.h include/CementSPH/DRR/cementsph/drr/vtkDRRFilter.h
+               include/CementSPH/CTScene/vtkSPHInjectionFilter.h lib/libCementSPH_SPH.a)
+    if(NOT EXISTS ${PREFIX}/${file})
+      file(GLOB_RECURSE found RELATIVE ${PREFIX} ${PREFIX}/*)
+      message(FATAL_ERROR "install did not put ${file} in place; it installed: ${found}")
+    endif()
+  endforeach()
+  # Per-component include folders: nothing merged into include/ itself.
+  if(EXISTS ${PREFIX}/include/cementsph)
+    message(FATAL_ERROR "install merged module headers into ${PREFIX}/include/cementsph; each belongs in include/CementSPH/<component>")
+  endif()
+  # The installed program finds its subcommand programs in libexec/cementsph (Launcher.cpp).
+  step("installed cementsph --version" ${PREFIX}/bin/cementsph --version)
+  if(NOT step_output MATCHES "cementsph [0-9]")
+    message(FATAL_ERROR "installed cementsph --version printed: ${step_output}")
+  endif()
+  message(STATUS "install: ok")
+  return()
+endif()
+
+foreach(var GROUP CONSUMER_SOURCE WORK_DIR)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "RunConsumer.cmake: ${var} is not set")
   endif()
 endforeach()
-# The installed program finds its subcommand programs in libexec/cementsph (Launcher.cpp).
-step("installed cementsph --version" ${prefix}/bin/cementsph --version)
-if(NOT step_output MATCHES "cementsph [0-9]")
-  message(FATAL_ERROR "installed cementsph --version printed: ${step_output}")
+if(NOT EXISTS ${PREFIX}/lib/cmake/CementSPH/CementSPHConfig.cmake)
+  message(FATAL_ERROR "no CementSPH package in ${PREFIX}: the test Install.Package installs it (run it first)")
 endif()
-step("configure consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE} -B ${WORK_DIR}/consumer-build
-     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix})
-step("build consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/consumer-build)
-step("run consumer" ${WORK_DIR}/consumer-build/consumer)
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(step_directory ${WORK_DIR})
+set(configure ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE} -B ${WORK_DIR} -DCMAKE_BUILD_TYPE=Release
+    -DCMAKE_PREFIX_PATH=${PREFIX} -DCONSUMER_GROUP=${GROUP})
+
+if(GROUP STREQUAL "unknown")
+  execute_process(COMMAND ${configure} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(rc EQUAL 0 OR NOT err MATCHES "CementSPH has no component 'NoSuchModule'")
+    message(FATAL_ERROR "find_package(CementSPH COMPONENTS SPH NoSuchModule) should fail naming NoSuchModule; "
+      "configure returned ${rc}:\n${out}\n${err}")
+  endif()
+  message(STATUS "unknown component refused: ok")
+  return()
+endif()
+
+step("configure consumer (${GROUP})" ${configure})
+if(GROUP STREQUAL "sph")
+  # Independently of the consumer's own checks: its cache holds no trace of VTK, ITK, MPI or a C compiler.
+  file(STRINGS ${WORK_DIR}/CMakeCache.txt foreign REGEX "^(VTK_DIR|ITK_DIR|MPI_C_[A-Z_]*|HDF5_[A-Z_]*|CMAKE_C_COMPILER):")
+  if(foreign)
+    message(FATAL_ERROR "find_package(CementSPH COMPONENTS SPH) looked for more than Eigen and OpenMP: ${foreign}")
+  endif()
+endif()
+step("build consumer (${GROUP})" ${CMAKE_COMMAND} --build ${WORK_DIR})
+step("run consumer (${GROUP})" ${WORK_DIR}/consumer)
 message(STATUS "${step_output}")

@@ -1,15 +1,35 @@
-// Calls the installed particle engine: the Hagen-Poiseuille pressure drop of the README's viscosity
-// example (100 Pa.s through the 11G cannula, 2.388 mm bore, 90 mm long, at 0.05 ml/s), checked against
-// the law written out here, dP = 128 mu L Q / (pi D^4) = 0.5637 MPa. Exit 0 when they agree to 1e-12.
-#include "cementsph/sph/HagenPoiseuille.h"
+// Runs the checks of the components this consumer was configured with (CONSUMER_GROUP); exit 0 when all pass.
+#include "Checks.h"
 
 #include <cmath>
 #include <cstdio>
 
+int compare(const char* name, double got, double expected, double tolerance) {
+  const bool ok = std::abs(got - expected) <= tolerance;
+  std::printf("%s: %.12g (expected %.12g, tolerance %.3g) %s\n", name, got, expected, tolerance, ok ? "ok" : "FAILED");
+  return ok ? 0 : 1;
+}
+
+#if defined(CONSUMER_GROUP_SPH)
+// A component exposes only its own headers (include/CementSPH/<component>): SPH's consumer cannot see DRR's.
+#if __has_include("cementsph/drr/DRRGeometry.h")
+#error "the SPH component's include folder exposes DRR's headers"
+#endif
+#endif
+
 int main() {
-  const double mu = 100.0, length = 0.090, flow = 0.05e-6, diameter = 2.388e-3;
-  const double expected = 128.0 * mu * length * flow / (M_PI * std::pow(diameter, 4));
-  const double got = cementsph::sph::hagenPoiseuillePressureDrop(mu, length, flow, diameter);
-  std::printf("pressure drop %.6f MPa (expected %.6f MPa)\n", got / 1e6, expected / 1e6);
-  return std::abs(got - expected) <= 1e-12 * expected ? 0 : 1;
+  int failures = 0;
+#if defined(CONSUMER_GROUP_SPH)
+  failures += checkSph();
+#elif defined(CONSUMER_GROUP_IMAGINGIO)
+  failures += checkImagingIO();
+#elif defined(CONSUMER_GROUP_CTSCENE)
+  failures += checkCTScene();
+#elif defined(CONSUMER_GROUP_DRR)
+  failures += checkDrr();
+#elif defined(CONSUMER_GROUP_ALL)
+  failures += checkSph() + checkDrr() + checkCaseFarm();
+#endif
+  std::printf("%s\n", failures == 0 ? "consumer checks passed" : "consumer checks FAILED");
+  return failures == 0 ? 0 : 1;
 }
