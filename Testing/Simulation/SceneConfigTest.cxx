@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <tuple>
 
 using namespace cementsph::scene;
@@ -332,4 +333,29 @@ TEST(SceneConfig, TrailingNulBytesOrGarbageAreRefused) {
   }
   write(std::string("\0", 1) + object);
   EXPECT_THROW(loadSceneFile(path), std::invalid_argument);
+}
+
+// The keys the user set are recorded (the scene file's and the command line's), not the preset's defaults; the
+// driver warns of those the chosen engine does not read (SceneKeysTest).
+TEST(SceneConfig, RecordsTheKeysTheUserSet) {
+  const SceneConfig s = sceneFromJson({{"tip_mm", {1.0, 2.0, 3.0}}, {"volume_ml", 0.5}}, {"integrator=overdamped"});
+  EXPECT_EQ(s.explicitKeys, (std::set<std::string>{"tip_mm", "volume_ml", "integrator"}));
+  EXPECT_TRUE(scenePreset("paper").explicitKeys.empty());
+}
+
+// sceneKeyNames() is the parser's list: each name is taken as a key (a value of the wrong type is refused naming
+// the key, never as an unknown key), and a name outside it is an unknown key.
+TEST(SceneConfig, TheListOfKeyNamesIsTheParsers) {
+  EXPECT_EQ(sceneKeyNames().size(), 57u); // the parser's branches, counted apart (the key == "..." tests)
+  for (const std::string& key : sceneKeyNames()) {
+    SceneConfig s;
+    try {
+      applySceneJson(s, json{{key, json::array({json::object()})}}); // no key takes [{}]
+      ADD_FAILURE() << key << " took [{}]";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).find("unknown key"), std::string::npos) << key << ": " << e.what();
+    }
+  }
+  SceneConfig s;
+  EXPECT_THROW(applySceneJson(s, json{{"particle_radius", 0.5}}), std::invalid_argument);
 }

@@ -237,6 +237,11 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   setup.model.pressureModel = choice.pressureModel;
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
   if (o.progress) std::cerr << "inject: bone " << bone.model << ": " << bone.reason << "\n";
+  // Keys the user set that this engine does not read: never ignored silently. Printed with the progress lines
+  // (a quiet run, or a plan's evaluations, has them in metrics.json only).
+  const std::vector<std::string> unreadKeys = sceneKeysNotRead(scene, choice.pressureModel, choice);
+  if (o.progress)
+    for (const std::string& w : unreadKeys) std::cerr << "inject: warning: " << w << "\n";
 
   const std::unique_ptr<InjectionModel> model = entry.make();
   model->start(setup);
@@ -245,6 +250,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   const double hu = o.huPerRelativeDensity;
   InjectionResult result;
   InjectionSummary& s = result.summary;
+  s.warnings = unreadKeys;
   auto volumeRecord = [&]() {
     return nlohmann::json{{"time_s", model->time()}, {"volume_injected_ml", model->injectedVolumeM3() * 1e6},
                           {"cement_volume_ml", model->cementVolumeM3() * 1e6}};
@@ -308,7 +314,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   model->report(s, result.engineFigures);
   const std::vector<double> finalDensity = model->cementDensity(); // kg/m^3 per region voxel, at the end
   edgeWarnings(*ct, solid, finalDensity, s);
-  for (const std::string& w : s.warnings) std::cerr << "inject: warning: " << w << "\n";
+  for (std::size_t w = unreadKeys.size(); w < s.warnings.size(); ++w) std::cerr << "inject: warning: " << s.warnings[w] << "\n";
 
   result.particles = model->cement();
   s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());

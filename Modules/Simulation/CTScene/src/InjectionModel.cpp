@@ -153,7 +153,17 @@ InjectionModelRegistry& InjectionModelRegistry::instance() {
 void InjectionModelRegistry::add(const std::string& name, Factory factory, std::string description) {
   if (name.empty() || !factory) throw std::invalid_argument("injection model registry: a model needs a name and a factory");
   if (has(name)) throw std::invalid_argument("injection model registry: \"" + name + "\" is registered already");
-  entries_[name] = Entry{std::move(factory), std::move(description)};
+  entries_[name] = Entry{std::move(factory), std::move(description), std::nullopt};
+}
+
+void InjectionModelRegistry::add(const std::string& name, Factory factory, std::string description, SceneKeys sceneKeys) {
+  // A misspelt key would be reported as unread in every run of the engine: refused here, at registration.
+  for (const std::string& key : sceneKeys)
+    if (!sceneKeyNames().count(key))
+      throw std::invalid_argument("injection model registry: \"" + name + "\" declares \"" + key +
+                                  "\", which is not a scene key (SceneConfig.h)");
+  add(name, std::move(factory), std::move(description));
+  entries_[name].sceneKeys = std::move(sceneKeys);
 }
 
 bool InjectionModelRegistry::has(const std::string& name) const { return entries_.count(name) > 0; }
@@ -171,6 +181,55 @@ std::vector<std::string> InjectionModelRegistry::names() const {
   std::vector<std::string> n;
   for (const auto& [name, e] : entries_) n.push_back(name);
   return n;
+}
+
+const InjectionModelRegistry::SceneKeys& commonSceneKeys() {
+  // What InjectionDriver.cpp reads whatever the engine: the presets (h/d, rest density), the tip and cannula
+  // (the region, the markups, every engine's outlet), the flow and volume (the run's length), the viscosity
+  // schedule, the region and the bone choice (threshold_hu, bone_model, cortical_hu), the snapshots, the
+  // model's name.
+  static const InjectionModelRegistry::SceneKeys keys{
+      "scene_preset", "preset", "tip_mm", "direction", "cannula_inner_diameter_mm", "cannula_gauge",
+      "cannula_length_mm", "cannula_wall", "flow_rate_ml_per_s", "volume_ml", "viscosity_pa_s",
+      "viscosity_rate_pa_per_s", "viscosity_table", "threshold_hu", "roi_size_mm", "snapshot_interval_s",
+      "simulated_ct_snapshots", "pressure_model", "bone_model", "cortical_hu"};
+  return keys;
+}
+
+const InjectionModelRegistry::SceneKeys& modelChoiceSceneKeys() {
+  // chooseModel's dimensionless numbers: the particle spacing (Re, St) and the sound speed (compression).
+  static const InjectionModelRegistry::SceneKeys keys{"particle_radius_mm", "sound_speed_m_per_s"};
+  return keys;
+}
+
+std::vector<std::string> sceneKeysNotRead(const SceneConfig& scene, const std::string& engine, const ModelChoice& choice,
+                                          const InjectionModelRegistry& registry) {
+  const InjectionModelRegistry::Entry& entry = registry.at(engine);
+  if (!entry.sceneKeys) return {};
+  const bool automatic = scene.pressureModel == "auto";
+  // Why this engine: the scene forced it, or the automatic choice's reason (its first clause; metrics.json's
+  // model_reason has the numbers).
+  const std::string why = automatic ? "pressure_model \"auto\" chose it: " + choice.reason.substr(0, choice.reason.find(" ("))
+                                    : "set by the scene key pressure_model";
+  // The value each key has when not set: the scene preset's, under the scene's model preset (fixed_particle_sums'
+  // default follows it).
+  SceneConfig unset = scenePreset(scene.scenePreset);
+  unset.modelPreset = scene.modelPreset;
+  const json defaults = toJson(unset), given = toJson(scene);
+  std::vector<std::string> warnings;
+  for (const std::string& key : scene.explicitKeys) {
+    if (commonSceneKeys().count(key) || entry.sceneKeys->count(key)) continue;
+    if (automatic && modelChoiceSceneKeys().count(key)) continue;
+    if (defaults.contains(key) && given.contains(key) && defaults[key] == given[key]) continue;
+    std::string readers;
+    for (const std::string& other : registry.names()) {
+      const auto& keys = registry.at(other).sceneKeys;
+      if (other != engine && keys && keys->count(key)) readers += (readers.empty() ? "" : ", ") + other;
+    }
+    warnings.push_back("scene key " + key + " does not apply to the " + engine + " model (chosen: " + why +
+                       "); it was ignored" + (readers.empty() ? std::string() : " (it is read by: " + readers + ")"));
+  }
+  return warnings;
 }
 
 } // namespace cementsph::scene

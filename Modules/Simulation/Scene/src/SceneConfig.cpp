@@ -73,6 +73,24 @@ void requirePositive(double x, const std::string& key) {
 
 } // namespace
 
+const std::set<std::string>& sceneKeyNames() {
+  // The same names as applySceneJson's branches (SceneConfigTest checks that each is accepted as a key).
+  static const std::set<std::string> names{
+      "scene_preset", "preset", "particle_radius_mm", "tip_mm", "direction", "cannula_inner_diameter_mm",
+      "cannula_length_mm", "cannula_wall", "flow_rate_ml_per_s", "volume_ml", "viscosity_pa_s",
+      "viscosity_rate_pa_per_s", "viscosity_table", "threshold_hu", "roi_size_mm", "snapshot_interval_s",
+      "simulated_ct_snapshots", "solid_mass_factor", "drag_coefficient", "sound_speed_m_per_s", "integrator",
+      "fixed_particle_sums", "fixed_field_spacing_over_h", "max_displacement_over_h", "neighbour_skin_over_h",
+      "pressure_model", "pore_permeability_m2", "capillary_tension_n_per_m", "viscosity_law", "consistency_pa_s_n",
+      "flow_index", "zero_shear_viscosity_pa_s", "infinite_shear_viscosity_pa_s", "carreau_time_constant_s",
+      "viscosity_min_pa_s", "viscosity_max_pa_s", "mixing_to_injection_s", "curing_table", "cement",
+      "curing_model", "curing_time_s", "cured_viscosity_pa_s", "curing_reference_time_s", "bone_model",
+      "marrow_hu", "bone_tissue_hu", "kozeny_carman_diameter_mm", "cortical_hu", "soft_tissue_max_hu",
+      "soft_tissue_permeability_m2", "stop_at_first_leak", "allow_tip_outside_bone", "labels_path",
+      "label_table", "second_tip_withdrawal_mm", "second_tip_volume_ml", "cannula_gauge"};
+  return names;
+}
+
 SceneConfig scenePreset(const std::string& name) {
   if (name != "paper")
     throw std::invalid_argument("scene: key 'scene_preset' must be \"paper\" (got \"" + shown(name) + "\")");
@@ -228,6 +246,7 @@ void applySceneJson(SceneConfig& s, const json& j) {
       }
     } else
       throw std::invalid_argument("scene: unknown key '" + shown(key) + "'");
+    s.explicitKeys.insert(key);
   }
 }
 

@@ -33,6 +33,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -164,15 +165,24 @@ public:
 
 // Engines by name. A new engine is one folder (src/Models/<Name>/) and one line in src/InjectionModels.cpp;
 // a test or a plug-in may add one at run time.
+//
+// Each engine declares the scene keys it reads besides commonSceneKeys() (those the driver reads for every
+// engine). After the model is chosen, a key the user set (SceneConfig::explicitKeys) that neither list holds is
+// a warning (sceneKeysNotRead): a particle-only key under voxel-darcy changes nothing, and the user must know.
 class InjectionModelRegistry {
 public:
   using Factory = std::function<std::unique_ptr<InjectionModel>()>;
+  using SceneKeys = std::set<std::string>;
   struct Entry {
     Factory make;
     std::string description; // what metrics.json's "model" says: "incompressible-darcy-on-voxels", ...
+    // The scene keys the engine reads besides the common ones; none: not declared (no key is reported unread).
+    std::optional<SceneKeys> sceneKeys;
   };
   static InjectionModelRegistry& instance(); // with the built-in engines registered
   void add(const std::string& name, Factory factory, std::string description);
+  // The same with the engine's scene keys; each must be a scene key (sceneKeyNames), else std::invalid_argument.
+  void add(const std::string& name, Factory factory, std::string description, SceneKeys sceneKeys);
   bool has(const std::string& name) const;
   const Entry& at(const std::string& name) const; // std::invalid_argument listing the names
   std::vector<std::string> names() const;
@@ -189,5 +199,19 @@ void addPressureSolverFigures(nlohmann::json& engineFigures, std::size_t solves,
 
 // The built-in engines (src/InjectionModels.cpp).
 void registerBuiltInInjectionModels(InjectionModelRegistry& registry);
+
+// The scene keys the driver reads for every engine: the scene and model presets, the tip and cannula, the flow,
+// the viscosity schedule, the region and the bone choice, the snapshots, the model choice (InjectionDriver.cpp).
+const InjectionModelRegistry::SceneKeys& commonSceneKeys();
+// The keys pressure_model "auto" reads to choose the model (ModelSelection.h): with "auto" they were not ignored.
+const InjectionModelRegistry::SceneKeys& modelChoiceSceneKeys();
+
+// One warning per key the user set (scene.explicitKeys) that the chosen engine `engine` does not read (neither
+// common, nor the engine's, nor the choice's under "auto"), naming the key, the engine and why it was chosen,
+// and which engines would read it. A key set to the value it has anyway (the scene preset's) changes nothing
+// whatever the engine and is not reported: a recorded scene.json, which lists solid_mass_factor and
+// fixed_particle_sums always, replays without noise. Nothing for an engine that declared no keys.
+std::vector<std::string> sceneKeysNotRead(const SceneConfig& scene, const std::string& engine, const ModelChoice& choice,
+                                          const InjectionModelRegistry& registry = InjectionModelRegistry::instance());
 
 } // namespace cementsph::scene

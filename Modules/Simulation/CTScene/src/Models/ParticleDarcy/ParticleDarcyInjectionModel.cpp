@@ -737,4 +737,11 @@ private:
 
 std::unique_ptr<InjectionModel> makeParticleDarcyInjectionModel() { return std::make_unique<ParticleDarcyInjectionModel>(); }
 
+// The scene keys this engine reads besides the driver's (InjectionModel.h): the particle spacing, the pore
+// permeability (or the preset's drag through k0 = h^5 / (Cf d^3)), and the law and curing only to refuse any but
+// a Newtonian cement.
+InjectionModelRegistry::SceneKeys particleDarcySceneKeys() {
+  return {"particle_radius_mm", "drag_coefficient", "pore_permeability_m2", "viscosity_law", "curing_model"};
+}
+
 } // namespace cementsph::scene

@@ -259,4 +259,13 @@ private:
 
 std::unique_ptr<InjectionModel> makeParticleInjectionModel() { return std::make_unique<ParticleInjectionModel>(); }
 
+// The scene keys these engines (incompressible, equation-of-state) read besides the driver's (InjectionModel.h):
+// the particles' size and the SPH model's overrides (sph::ModelParameters), the fixed particles' mass, and the
+// law and curing only to refuse any but a Newtonian cement.
+InjectionModelRegistry::SceneKeys particleSceneKeys() {
+  return {"particle_radius_mm", "drag_coefficient", "sound_speed_m_per_s", "integrator", "fixed_particle_sums",
+          "fixed_field_spacing_over_h", "max_displacement_over_h", "neighbour_skin_over_h", "solid_mass_factor",
+          "viscosity_law", "curing_model"};
+}
+
 } // namespace cementsph::scene

@@ -617,4 +617,17 @@ private:
 
 std::unique_ptr<InjectionModel> makeVoxelDarcyInjectionModel() { return std::make_unique<VoxelDarcyInjectionModel>(); }
 
+// The scene keys this engine reads besides the driver's (InjectionModel.h): the particle spacing and the preset's
+// drag through the default pore permeability k0 = h^5 / (Cf d^3), the capillary entry, the cement's law and
+// curing, the continuum's calibration and anatomy (labels, leaks, a tip outside bone), the second tip.
+InjectionModelRegistry::SceneKeys voxelDarcySceneKeys() {
+  return {"particle_radius_mm", "drag_coefficient", "pore_permeability_m2", "capillary_tension_n_per_m",
+          "viscosity_law", "consistency_pa_s_n", "flow_index", "zero_shear_viscosity_pa_s",
+          "infinite_shear_viscosity_pa_s", "carreau_time_constant_s", "viscosity_min_pa_s", "viscosity_max_pa_s",
+          "mixing_to_injection_s", "curing_table", "cement", "curing_model", "curing_time_s", "cured_viscosity_pa_s",
+          "curing_reference_time_s", "marrow_hu", "bone_tissue_hu", "kozeny_carman_diameter_mm",
+          "soft_tissue_max_hu", "soft_tissue_permeability_m2", "stop_at_first_leak", "allow_tip_outside_bone",
+          "labels_path", "label_table", "second_tip_withdrawal_mm", "second_tip_volume_ml"};
+}
+
 } // namespace cementsph::scene

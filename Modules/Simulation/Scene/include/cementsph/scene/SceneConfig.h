@@ -92,6 +92,7 @@
 #include <nlohmann/json.hpp>
 
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -145,6 +146,10 @@ struct SceneConfig {
   nlohmann::json labelTable;           // which labels are which tissue (LabelTable::fromJson); null: TotalSegmentator
   std::optional<double> secondTipWithdrawalMm; // a second tip this far back along the axis; none: one tip
   double secondTipVolumeMl = 0.0;              // of volume_ml, injected at the second tip
+  // The keys the user set: each key applySceneJson applied (the scene file's and the command line's overrides).
+  // The driver warns of those the chosen engine does not read (InjectionModel.h, sceneKeysNotRead); a field
+  // set in code is not a key the user set.
+  std::set<std::string> explicitKeys;
   double curingFactor(double timeSinceInjectionStartS) const;
   bool hasSecondTip() const { return secondTipWithdrawalMm.has_value(); }
   Eigen::Vector3d secondTipMm() const { return *tipMm - *secondTipWithdrawalMm * direction.normalized(); }
@@ -164,6 +169,9 @@ struct SceneConfig {
   // Throws std::invalid_argument naming the first key out of range (including a missing tip).
   void validate() const;
 };
+
+// Every key applySceneJson accepts (the list above), for the engines' declarations of the keys they read.
+const std::set<std::string>& sceneKeyNames();
 
 // The paper's scene: r 0.57 mm, 11G (ID 2.388 mm, 9 cm), 0.05 ml/s, 5 ml, 100 Pa.s, HU > 0, 40 mm cube.
 SceneConfig scenePreset(const std::string& name);
