@@ -172,7 +172,10 @@ TEST(SliceComparison, MatchesBaselineExactly) {
   forgetDisplay();
   const auto png = scratchFolder() / "slices.png";
   const auto t = std::chrono::steady_clock::now();
-  renderSliceComparison(phantom(0.0), phantom(1.5), png, 5.0);
+  // The bare panels (the labels are LabelledSlicesTest's): their pixels are the baseline's.
+  SliceComparisonOptions bare;
+  bare.annotate = false;
+  renderSliceComparison(phantom(0.0), phantom(1.5), png, 5.0, bare);
   std::cout << "renderSliceComparison took " << secondsSince(t) << " s\n";
   // 48 voxels x scale 4 = 192 px panels, 3 slices, 2 rows, 6 px gaps.
   expectNotBlank(png, 6 + 3 * (192 + 6), 6 + 2 * (160 + 6), 8); // a few grey levels: air, bone, cement
@@ -184,7 +187,9 @@ TEST(SliceComparison, MatchesBaselineExactly) {
 
 TEST(SliceComparison, DifferentSimulationDoesNotMatchBaseline) {
   const auto png = scratchFolder() / "slices.png";
-  renderSliceComparison(phantom(0.0), phantom(-1.5), png, 5.0);
+  SliceComparisonOptions bare;
+  bare.annotate = false;
+  renderSliceComparison(phantom(0.0), phantom(-1.5), png, 5.0, bare);
   const double difference = imageDifference(png, kBaselineDir / "slice_comparison.png");
   std::cout << "difference of a changed simulation from the baseline: " << difference << "\n";
   EXPECT_GT(difference, 0.005);
@@ -192,7 +197,9 @@ TEST(SliceComparison, DifferentSimulationDoesNotMatchBaseline) {
 
 TEST(SliceComparison, PostOnlyGivesOneRowAndBadInputsThrow) {
   const auto dir = scratchFolder();
-  renderSliceComparison(phantom(0.0), nullptr, dir / "post.png", 5.0);
+  SliceComparisonOptions bare;
+  bare.annotate = false; // the panels alone: one row of 160 px
+  renderSliceComparison(phantom(0.0), nullptr, dir / "post.png", 5.0, bare);
   const auto s = summarisePng(dir / "post.png");
   EXPECT_EQ(s.height, 6 + 160 + 6);
   EXPECT_THROW(renderSliceComparison(phantom(0.0), nullptr, dir / "x.png", 0.0), std::invalid_argument);
@@ -287,6 +294,7 @@ TEST(CementSlices, GreyIsTheBoneWindowBlueIsCementRedIsLeak) {
   const auto dir = scratchFolder();
   CementSlicesOptions o;
   o.pixelsPerPanel = 200; // 10 pixels per voxel
+  o.annotate = false;     // the panels alone, 8 px apart (the labels are LabelledSlicesTest's)
   writeCementSlices(ct, labels, {15, 10, 10}, dir / "slices.png", o);
   auto reader = vtkSmartPointer<vtkPNGReader>::New();
   reader->SetFileName((dir / "slices.png").string().c_str());

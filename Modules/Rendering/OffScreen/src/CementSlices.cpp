@@ -1,14 +1,77 @@
 #include "cementsph/rendering/CementSlices.h"
 
+#include "PixelCanvas.h"
+#include "cementsph/anatomy/LeakSites.h"
 #include "cementsph/rendering/OffScreenWindow.h"
 
+#include <vtkMatrix3x3.h>
 #include <vtkSmartPointer.h>
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
 #include <stdexcept>
 
 namespace cementsph::rendering {
+
+namespace {
+
+using detail::PixelCanvas;
+using detail::Rgb;
+
+const Rgb kBlack{0, 0, 0}, kWhite{255, 255, 255};
+const Rgb kTip{255, 255, 0}, kTrajectory{0, 220, 255}, kVertebra{0, 200, 80};
+const Rgb kLeakUnknown{230, 20, 20};
+
+// Leak kinds in legend order, their colours and words (CementSlices.h lists the colours).
+struct LeakStyle {
+  const char* kind;
+  Rgb colour;
+  const char* words;
+};
+const LeakStyle kLeakStyles[] = {
+    {"disc", {220, 0, 220}, "leak into the disc"},
+    {"canal", {255, 140, 0}, "leak into the canal"},
+    {"venous", {140, 70, 255}, "venous leak"},
+    {"other_bone", {150, 90, 30}, "leak into other bone"},
+    {"cortex_breach", {230, 20, 20}, "cortex breach"},
+    {"soft-tissue", {230, 20, 20}, "leak (below the bone band)"},
+};
+
+bool styled(const std::string& kind) {
+  for (const LeakStyle& s : kLeakStyles)
+    if (kind == s.kind) return true;
+  return false;
+}
+
+Rgb leakColour(const std::string& kind) {
+  for (const LeakStyle& s : kLeakStyles)
+    if (kind == s.kind) return s.colour;
+  return kLeakUnknown;
+}
+
+// The panels: which voxel axis runs to the right (u), which down or up (v), which is fixed.
+struct Panel {
+  int u, v, fixed;
+  bool vUp; // index v grows upwards (z: superior up); otherwise downwards (y: posterior down in an LPS CT)
+};
+constexpr Panel kPanels[3] = {{0, 1, 2, false}, {0, 2, 1, true}, {1, 2, 0, true}};
+
+void requireSameGrid(vtkImageData* image, const int dims[3], const char* what) {
+  if (!image) return;
+  int d[3];
+  image->GetDimensions(d);
+  if (d[0] != dims[0] || d[1] != dims[1] || d[2] != dims[2])
+    throw std::invalid_argument(std::string("cement slices: the ") + what + " is not on the CT's grid");
+}
+
+double voxel(vtkImageData* image, const int ijk[3]) { return image->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0); }
+
+} // namespace
 
 void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<double, 3>& centreMm,
                        const std::filesystem::path& png, const CementSlicesOptions& o) {
@@ -18,47 +81,172 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   labels->GetDimensions(ldims);
   if (dims[0] != ldims[0] || dims[1] != ldims[1] || dims[2] != ldims[2])
     throw std::invalid_argument("cement slices: the CT and the labels have different grids");
-  double origin[3], spacing[3];
-  ct->GetOrigin(origin);
+  requireSameGrid(o.tissueClasses, dims, "tissue class map");
+  requireSameGrid(o.vertebraMask, dims, "vertebra mask");
+  if (!(o.scaleBarMm >= 0.0) || !std::isfinite(o.scaleBarMm))
+    throw std::invalid_argument("cement slices: the scale bar's length must be a finite number of mm >= 0");
+  double spacing[3], direction[9];
   ct->GetSpacing(spacing);
+  std::copy_n(ct->GetDirectionMatrix()->GetData(), 9, direction);
+  // Through the direction matrix, so a mirrored or permuted CT is sliced where the point really is.
+  double centreIndex[3];
+  ct->TransformPhysicalPointToContinuousIndex(centreMm.data(), centreIndex);
   int centre[3];
   for (int a = 0; a < 3; ++a) {
-    centre[a] = int(std::lround((centreMm[std::size_t(a)] - origin[a]) / spacing[a]));
-    if (centre[a] < 0 || centre[a] >= dims[a]) throw std::invalid_argument("cement slices: the centre is outside the CT");
+    centre[a] = int(std::lround(centreIndex[a]));
+    if (!std::isfinite(centreIndex[a]) || centre[a] < 0 || centre[a] >= dims[a])
+      throw std::invalid_argument("cement slices: the centre is outside the CT");
   }
-  // Panels: axial (x right, y down: z fixed), coronal (x, z up: y fixed), sagittal (y, z up: x fixed).
-  struct Panel { int u, v, fixed; bool flipV; };
-  const Panel panels[3] = {{0, 1, 2, false}, {0, 2, 1, true}, {1, 2, 0, true}};
+
+  // The cannula in continuous voxel indices: the tip and a point far behind it on the shaft (the shaft's
+  // projection is a straight line, so its two ends are enough).
+  std::optional<std::array<double, 3>> tipIndex, shaftEndIndex;
+  if (o.tipMm) {
+    std::array<double, 3> t{};
+    ct->TransformPhysicalPointToContinuousIndex(o.tipMm->data(), t.data());
+    tipIndex = t;
+    if (o.directionUnit) {
+      const auto& d = *o.directionUnit;
+      const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      if (!(norm > 0.0) || !std::isfinite(norm))
+        throw std::invalid_argument("cement slices: the cannula direction is zero or not finite");
+      double diagonal = 0.0;
+      for (int a = 0; a < 3; ++a) diagonal += std::pow(dims[a] * spacing[a], 2);
+      const double behind = 2.0 * std::sqrt(diagonal) + 1.0; // beyond every panel's edge
+      std::array<double, 3> end{}, p{};
+      for (int a = 0; a < 3; ++a) p[std::size_t(a)] = (*o.tipMm)[std::size_t(a)] - behind * d[std::size_t(a)] / norm;
+      ct->TransformPhysicalPointToContinuousIndex(p.data(), end.data());
+      shaftEndIndex = end;
+    }
+  }
+
+  // Which label is the vertebra: the given one, the one under the tip, else any non-zero voxel.
+  int vertebraLabel = o.vertebraLabel;
+  if (o.vertebraMask && vertebraLabel < 0 && tipIndex) {
+    int t[3];
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      t[a] = int(std::lround((*tipIndex)[std::size_t(a)]));
+      inside = inside && t[a] >= 0 && t[a] < dims[a];
+    }
+    if (inside) vertebraLabel = int(std::lround(voxel(o.vertebraMask, t)));
+    if (vertebraLabel == 0) vertebraLabel = -1;
+  }
+  auto inVertebra = [&](const int ijk[3]) {
+    const double value = voxel(o.vertebraMask, ijk);
+    return vertebraLabel >= 0 ? std::lround(value) == vertebraLabel : value != 0.0;
+  };
+  // The kind of a leaked voxel: its tissue class's, the nearest site's, or "" (not known).
+  auto leakKindAt = [&](const int ijk[3]) -> std::string {
+    if (o.tissueClasses) {
+      const long code = std::lround(voxel(o.tissueClasses, ijk));
+      if (code < 0 || code > long(anatomy::TissueClass::Air)) return "";
+      return anatomy::leakKind(anatomy::TissueClass(code));
+    }
+    if (o.leakSites.empty()) return "";
+    double p[3];
+    ct->TransformIndexToPhysicalPoint(ijk[0], ijk[1], ijk[2], p);
+    double best = std::numeric_limits<double>::infinity();
+    std::string kind;
+    for (const LeakSiteMark& s : o.leakSites) {
+      const double d2 = std::pow(p[0] - s.positionMm[0], 2) + std::pow(p[1] - s.positionMm[1], 2) +
+                        std::pow(p[2] - s.positionMm[2], 2);
+      if (d2 < best) best = d2, kind = s.kind;
+    }
+    return kind;
+  };
+
+  // Panel sizes: square pixels in mm, each voxel an integer number of pixels wide.
   int scale[3], widths[3], heights[3];
-  int total = 0, height = 0;
   for (int p = 0; p < 3; ++p) {
-    const Panel& q = panels[p];
-    // Square pixels in mm: the scale per voxel follows each axis' spacing.
+    const Panel& q = kPanels[p];
     const double mmPerPixel = std::max(dims[q.u] * spacing[q.u], 1e-9) / o.pixelsPerPanel;
     scale[p] = std::max(1, int(std::lround(spacing[q.u] / mmPerPixel)));
     widths[p] = dims[q.u] * scale[p];
-    heights[p] = int(std::lround(dims[q.v] * spacing[q.v] / spacing[q.u])) * scale[p];
-    total += widths[p] + (p ? 8 : 0);
-    height = std::max(height, heights[p]);
+    heights[p] = std::max(1, int(std::lround(dims[q.v] * spacing[q.v] / spacing[q.u]))) * scale[p];
   }
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  image->SetDimensions(total, height, 1);
-  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
-  auto* out = static_cast<unsigned char*>(image->GetScalarPointer());
-  std::fill(out, out + std::size_t(total) * std::size_t(height) * 3, 255);
-  int x0 = 0;
+  // The voxel a panel pixel shows.
+  auto voxelAt = [&](int p, int x, int y, int ijk[3]) {
+    const Panel& q = kPanels[p];
+    ijk[q.fixed] = centre[q.fixed];
+    ijk[q.u] = std::min(dims[q.u] - 1, x / scale[p]);
+    const int down = std::min(dims[q.v] - 1, int(double(y) * dims[q.v] / heights[p]));
+    ijk[q.v] = q.vUp ? dims[q.v] - 1 - down : down;
+  };
+
+  // What the legend needs: the labels and leak kinds on the three slices.
+  std::set<int> labelsShown;
+  std::set<std::string> kindsShown;
+  bool vertebraShown = false;
   for (int p = 0; p < 3; ++p) {
-    const Panel& q = panels[p];
-    for (int py = 0; py < heights[p]; ++py)
-      for (int px = 0; px < widths[p]; ++px) {
+    const Panel& q = kPanels[p];
+    int ijk[3];
+    ijk[q.fixed] = centre[q.fixed];
+    for (ijk[q.v] = 0; ijk[q.v] < dims[q.v]; ++ijk[q.v])
+      for (ijk[q.u] = 0; ijk[q.u] < dims[q.u]; ++ijk[q.u]) {
+        const int label = int(voxel(labels, ijk));
+        labelsShown.insert(label);
+        if (label == 2) kindsShown.insert(leakKindAt(ijk));
+        if (o.vertebraMask && !vertebraShown) vertebraShown = inVertebra(ijk);
+      }
+  }
+  struct LegendEntry {
+    enum Kind { Swatch, Ring, Line, Outline } kind;
+    Rgb colour;
+    std::string words;
+  };
+  std::vector<LegendEntry> legend;
+  auto halfOverGrey = [](Rgb c) { // how a half-transparent overlay looks on the bone window's mid grey
+    return Rgb{static_cast<unsigned char>(std::lround(0.5 * 127.5 + 0.5 * c[0])),
+               static_cast<unsigned char>(std::lround(0.5 * 127.5 + 0.5 * c[1])),
+               static_cast<unsigned char>(std::lround(0.5 * 127.5 + 0.5 * c[2]))};
+  };
+  if (labelsShown.count(1)) legend.push_back({LegendEntry::Swatch, halfOverGrey({40, 110, 255}), "cement in bone"});
+  if (labelsShown.count(3)) legend.push_back({LegendEntry::Swatch, halfOverGrey({255, 220, 0}), "target without cement"});
+  for (const LeakStyle& s : kLeakStyles)
+    if (kindsShown.count(s.kind)) legend.push_back({LegendEntry::Swatch, s.colour, s.words});
+  for (const std::string& kind : kindsShown)
+    if (!styled(kind))
+      legend.push_back({LegendEntry::Swatch, kLeakUnknown, kind.empty() ? "leaked cement" : "leak: " + kind});
+  if (tipIndex) legend.push_back({LegendEntry::Ring, kTip, "cannula tip"});
+  if (shaftEndIndex) legend.push_back({LegendEntry::Line, kTrajectory, "trajectory (projected)"});
+  if (vertebraShown) legend.push_back({LegendEntry::Outline, kVertebra, "vertebra"});
+
+  // Layout: the panels side by side, each in its margins for the labels; the legend below.
+  const detail::PanelMargins margins = o.annotate ? detail::annotationMargins(o.fontPx) : detail::PanelMargins{};
+  const int gap = 8, border = o.annotate ? 6 : 0;
+  int panelX[3], total = border, tallest = 0;
+  for (int p = 0; p < 3; ++p) {
+    panelX[p] = total + margins.left;
+    total = panelX[p] + widths[p] + margins.right + (p < 2 ? gap : border);
+    tallest = std::max(tallest, heights[p]);
+  }
+  const int panelY = border + margins.top;
+  const int row = o.fontPx + 8, swatch = o.fontPx;
+  std::vector<std::array<int, 2>> legendAt; // each entry's top-left corner
+  int legendHeight = 0;
+  if (o.annotate && !legend.empty()) {
+    int x = border, y = panelY + tallest + margins.bottom + 4;
+    for (const LegendEntry& e : legend) {
+      const int w = swatch + 6 + PixelCanvas::textSize(e.words, o.fontPx)[0] + 16;
+      if (x > border && x + w > total - border) x = border, y += row;
+      legendAt.push_back({x, y});
+      x += w;
+    }
+    legendHeight = legendAt.back()[1] + row - (panelY + tallest + margins.bottom);
+  }
+  PixelCanvas canvas(total, panelY + tallest + margins.bottom + legendHeight + border, kWhite);
+
+  for (int p = 0; p < 3; ++p) {
+    const Panel& q = kPanels[p];
+    const int w = widths[p], h = heights[p];
+    std::vector<char> vertebra(o.vertebraMask ? std::size_t(w) * std::size_t(h) : 0);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
         int ijk[3];
-        ijk[q.fixed] = centre[q.fixed];
-        ijk[q.u] = std::min(dims[q.u] - 1, px / scale[p]);
-        const double along = double(py) / heights[p] * dims[q.v];
-        ijk[q.v] = std::min(dims[q.v] - 1, int(along));
-        if (!q.flipV) ijk[q.v] = dims[q.v] - 1 - ijk[q.v]; // VTK's image rows go up: keep +y (posterior) down
-        const double hu = ct->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0);
-        const int label = int(labels->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0));
+        voxelAt(p, x, y, ijk);
+        const double hu = voxel(ct, ijk);
+        const int label = int(voxel(labels, ijk));
         const double g = std::clamp((hu - (o.levelHu - 0.5 * o.windowHu)) / o.windowHu, 0.0, 1.0) * 255.0;
         double rgb[3] = {g, g, g};
         if (label == 1) { // cement in bone: blue, half over the CT
@@ -69,17 +257,79 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
           rgb[0] = 0.5 * g + 0.5 * 255;
           rgb[1] = 0.5 * g + 0.5 * 220;
           rgb[2] = 0.5 * g + 0.5 * 0;
-        } else if (label == 2) { // leaked: red, opaque
-          rgb[0] = 230;
-          rgb[1] = 20;
-          rgb[2] = 20;
+        } else if (label == 2) { // leaked: opaque, in its kind's colour
+          const Rgb c = leakColour(leakKindAt(ijk));
+          for (int k = 0; k < 3; ++k) rgb[k] = c[std::size_t(k)];
         }
-        unsigned char* pixel = out + 3 * (std::size_t(py) * std::size_t(total) + std::size_t(x0 + px));
-        for (int c = 0; c < 3; ++c) pixel[c] = static_cast<unsigned char>(std::lround(rgb[c]));
+        canvas.set(panelX[p] + x, panelY + y,
+                   {static_cast<unsigned char>(std::lround(rgb[0])), static_cast<unsigned char>(std::lround(rgb[1])),
+                    static_cast<unsigned char>(std::lround(rgb[2]))});
+        if (o.vertebraMask) vertebra[std::size_t(y) * std::size_t(w) + std::size_t(x)] = inVertebra(ijk);
       }
-    x0 += widths[p] + 8;
+    // The vertebra's outline: its pixels within 2 px of a pixel outside it (the panel's edge is no boundary).
+    if (o.vertebraMask)
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          if (!vertebra[std::size_t(y) * std::size_t(w) + std::size_t(x)]) continue;
+          bool edge = false;
+          for (int s = 1; s <= 2 && !edge; ++s)
+            for (const auto& d : {std::array<int, 2>{s, 0}, {-s, 0}, {0, s}, {0, -s}}) {
+              const int xx = x + d[0], yy = y + d[1];
+              if (xx >= 0 && yy >= 0 && xx < w && yy < h && !vertebra[std::size_t(yy) * std::size_t(w) + std::size_t(xx)])
+                edge = true;
+            }
+          if (edge) canvas.set(panelX[p] + x, panelY + y, kVertebra);
+        }
+    // The cannula, projected onto the panel's plane.
+    auto toPixel = [&](const std::array<double, 3>& c) {
+      const double down = (c[std::size_t(q.v)] + 0.5) * h / dims[q.v];
+      return std::array<double, 2>{panelX[p] + (c[std::size_t(q.u)] + 0.5) * scale[p], panelY + (q.vUp ? h - down : down)};
+    };
+    const std::array<int, 4> clip{panelX[p], panelX[p] + w, panelY, panelY + h};
+    if (tipIndex && shaftEndIndex) {
+      const auto a = toPixel(*tipIndex), b = toPixel(*shaftEndIndex);
+      if (std::hypot(b[0] - a[0], b[1] - a[1]) > 1.0) canvas.line(a[0], a[1], b[0], b[1], 2.0, kTrajectory, clip);
+    }
+    if (tipIndex) {
+      const auto a = toPixel(*tipIndex);
+      if (a[0] >= clip[0] && a[0] <= clip[1] && a[1] >= clip[2] && a[1] <= clip[3]) canvas.ring(a[0], a[1], 6.0, 2.0, kTip);
+    }
+    if (o.annotate) {
+      detail::PanelAnnotation a;
+      double centrePoint[3];
+      ct->TransformIndexToPhysicalPoint(centre[0], centre[1], centre[2], centrePoint);
+      const int along = detail::patientAxis(direction, q.fixed);
+      std::ostringstream title;
+      title << detail::planeName(direction, q.fixed) << "  " << "xyz"[along] << " = " << std::fixed
+            << std::setprecision(1) << centrePoint[along] << " mm";
+      a.title = title.str();
+      a.left = detail::patientLetter(direction, q.u, -1);
+      a.right = detail::patientLetter(direction, q.u, +1);
+      a.top = detail::patientLetter(direction, q.v, q.vUp ? +1 : -1);
+      a.bottom = detail::patientLetter(direction, q.v, q.vUp ? -1 : +1);
+      a.mmPerPixel = spacing[q.u] / scale[p];
+      a.scaleBarMm = o.scaleBarMm;
+      detail::annotatePanel(canvas, panelX[p], panelY, w, h, a, o.fontPx);
+    }
   }
-  writeImagePng(image, png);
+  if (o.annotate)
+    for (std::size_t e = 0; e < legend.size(); ++e) {
+      const int x = legendAt[e][0], y = legendAt[e][1] + 2;
+      const LegendEntry& entry = legend[e];
+      switch (entry.kind) {
+      case LegendEntry::Swatch: canvas.fillRect(x, y, swatch, swatch, entry.colour); break;
+      case LegendEntry::Ring: canvas.ring(x + 0.5 * swatch, y + 0.5 * swatch, 0.5 * swatch - 2, 2.0, entry.colour); break;
+      case LegendEntry::Line:
+        canvas.line(x, y + 0.5 * swatch, x + swatch, y + 0.5 * swatch, 2.0, entry.colour, {0, canvas.width(), 0, canvas.height()});
+        break;
+      case LegendEntry::Outline:
+        canvas.fillRect(x, y, swatch, swatch, entry.colour);
+        canvas.fillRect(x + 2, y + 2, swatch - 4, swatch - 4, kWhite);
+        break;
+      }
+      canvas.text(entry.words, x + swatch + 6, y, o.fontPx, kBlack);
+    }
+  writeImagePng(canvas.toImage(), png);
 }
 
 } // namespace cementsph::rendering

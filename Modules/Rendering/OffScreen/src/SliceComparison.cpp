@@ -2,16 +2,20 @@
 // HU window) instead of going through vtkImageReslice + a render window: no GL means the same bytes on
 // every machine, so the test can compare exactly, and the picture needs no display at all.
 #include "cementsph/rendering/SliceComparison.h"
+#include "PixelCanvas.h"
 #include "cementsph/rendering/OffScreenWindow.h"
 
 #include <vtkImageData.h>
+#include <vtkDataArray.h>
+#include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
 #include <vtkSmartPointer.h>
-#include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -104,39 +108,36 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
   }
   int scale = options.pixelScale;
   if (scale <= 0) scale = std::max(1, (160 + nx - 1) / nx);
+  if (!(options.scaleBarMm >= 0.0) || !std::isfinite(options.scaleBarMm))
+    throw std::invalid_argument("renderSliceComparison: the scale bar's length must be a finite number of mm >= 0");
   const int gap = std::max(0, options.gapPx);
   const int panelW = nx * scale, panelH = ny * scale;
-  const int width = gap + static_cast<int>(z.size()) * (panelW + gap);
-  const int height = gap + static_cast<int>(rows.size()) * (panelH + gap);
+  // Each panel sits in its labels' margins (none without annotate), the cells gap px apart.
+  const detail::PanelMargins m =
+      options.annotate ? detail::annotationMargins(options.fontPx) : detail::PanelMargins{};
+  const int cellW = m.left + panelW + m.right, cellH = m.top + panelH + m.bottom;
+  const int width = gap + static_cast<int>(z.size()) * (cellW + gap);
+  const int height = gap + static_cast<int>(rows.size()) * (cellH + gap);
   if (width > 16384 || height > 16384)
     throw std::invalid_argument("renderSliceComparison: picture of " + std::to_string(width) + " x " +
                                 std::to_string(height) + " px is too large; lower pixelScale or maxSlices");
 
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  image->SetDimensions(width, height, 1);
-  // RGB although the slices are grey: viewers and the project's PNG checks treat 3 channels uniformly.
-  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
-  auto* out = static_cast<unsigned char*>(image->GetScalarPointer());
-  std::fill(out, out + static_cast<std::size_t>(width) * height * 3, 255);
-  // VTK's image row 0 is the PNG's bottom row; `put` takes top-down rows.
-  auto put = [&](int x, int yTopDown, unsigned char value) {
-    unsigned char* px = out + (static_cast<std::size_t>(height - 1 - yTopDown) * width + x) * 3;
-    px[0] = px[1] = px[2] = value;
-  };
-
+  detail::PixelCanvas canvas(width, height, {255, 255, 255});
   const double span = options.windowHighHU - options.windowLowHU;
+  const char* const rowNames[2] = {"post-op CT", "simulated CT"};
   for (std::size_t r = 0; r < rows.size(); ++r) {
     vtkImageData* v = rows[r];
     int d[3];
-    double origin[3], spacing[3];
+    double origin[3], spacing[3], direction[9];
     v->GetDimensions(d);
     v->GetOrigin(origin);
     v->GetSpacing(spacing);
+    std::copy_n(v->GetDirectionMatrix()->GetData(), 9, direction);
     vtkDataArray* s = v->GetPointData()->GetScalars();
     const vtkIdType plane = static_cast<vtkIdType>(d[0]) * d[1];
-    const int top = gap + static_cast<int>(r) * (panelH + gap);
+    const int top = gap + static_cast<int>(r) * (cellH + gap) + m.top;
     for (std::size_t c = 0; c < z.size(); ++c) {
-      const int leftPx = gap + static_cast<int>(c) * (panelW + gap);
+      const int leftPx = gap + static_cast<int>(c) * (cellW + gap) + m.left;
       const long k = std::lround((z[c] - origin[2]) / spacing[2]);
       const bool inside = k >= 0 && k < d[2];
       for (int j = 0; j < panelH; ++j) {
@@ -149,11 +150,27 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
             const double t = std::isnan(hu) ? 0.0 : std::clamp((hu - options.windowLowHU) / span, 0.0, 1.0);
             grey = static_cast<unsigned char>(std::lround(255.0 * t));
           }
-          put(leftPx + i, top + j, grey);
+          canvas.set(leftPx + i, top + j, {grey, grey, grey});
         }
       }
+      if (!options.annotate) continue;
+      // Voxel x runs to the right, y downwards; the letters say where they run in the patient.
+      detail::PanelAnnotation a;
+      std::ostringstream title;
+      title << rowNames[r] << "  " << detail::planeName(direction, 2) << " z = " << std::fixed << std::setprecision(1)
+            << z[c] << " mm";
+      a.title = title.str();
+      a.left = detail::patientLetter(direction, 0, -1);
+      a.right = detail::patientLetter(direction, 0, +1);
+      a.top = detail::patientLetter(direction, 1, -1);
+      a.bottom = detail::patientLetter(direction, 1, +1);
+      a.mmPerPixel = spacing[0] / scale;
+      a.scaleBarMm = options.scaleBarMm;
+      detail::annotatePanel(canvas, leftPx, top, panelW, panelH, a, options.fontPx);
     }
   }
+  // RGB although the slices are grey: viewers and the project's PNG checks treat 3 channels uniformly.
+  const auto image = canvas.toImage();
   writePngAtomically(image, png);
 }
 

@@ -26,6 +26,13 @@ struct SliceComparisonOptions {
   // least 160 px wide (small volumes would otherwise give thumbnails).
   int pixelScale = 0;
   int gapPx = 6; // white gap between panels and around the picture
+  // Issue 20, item 6: each panel's title (row and plane: "post-op CT  axial z = 5.0 mm"), the patient direction
+  // each edge faces (L/R, A/P from the volume's direction matrix, so a CT stored mirrored gets its letters on the
+  // other side) and a scale bar of scaleBarMm (halved until it fits) below it, its length scaleBarMm / (x spacing /
+  // pixelScale) px. Text is rasterised on the CPU (FreeType), like the panels. false: the bare panels.
+  bool annotate = true;
+  double scaleBarMm = 10.0; // 0: no bar
+  int fontPx = 12;
 };
 
 // The z positions (mm) of the slices renderSliceComparison() draws: spacingMm apart, centred on the
@@ -34,11 +41,11 @@ std::vector<double> slicePositionsMm(vtkImageData* postCT, vtkImageData* simulat
                                      const SliceComparisonOptions& options = {});
 
 // Writes a PNG with one column per slice: row 1 postCT, row 2 simulatedCT (omitted when simulatedCT is
-// null). Each slice is the nearest voxel plane to the z position in each volume (no interpolation); a
+// null), each panel in its labels' margins when annotate is set. Each slice is the nearest voxel plane to the z position in each volume (no interpolation); a
 // position outside a volume gives a black panel. Image x runs left to right, y (LPS: posterior) down.
-// Throws std::invalid_argument for a null/empty postCT, spacingMm <= 0, an empty HU window, or no
-// voxel at or above the cement threshold (when zRangeMm is empty); std::runtime_error if the file
-// cannot be written. The file is written atomically.
+// Throws std::invalid_argument for a null/empty postCT, spacingMm <= 0, an empty HU window, no voxel
+// at or above the cement threshold (when zRangeMm is empty), or a negative or non-finite scaleBarMm;
+// std::runtime_error if the file cannot be written. The file is written atomically.
 void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, const std::filesystem::path& png,
                            double spacingMm = 5.0, const SliceComparisonOptions& options = {});
 
