@@ -59,7 +59,6 @@ endfunction()
 function(_cementsph_install_package)
   set(_cementsph_components)
   set(_cementsph_component_table "")
-  set(CEMENTSPH_CONFIG_VTK_COMPONENTS)
   foreach(entry IN LISTS CEMENTSPH_EXPORTED_LIBRARIES CEMENTSPH_BUILD_FLAG_TARGETS)
     string(REPLACE ":" ";" pair "${entry}")
     list(GET pair 0 target)
@@ -113,13 +112,13 @@ function(_cementsph_install_package)
         endif()
         continue()
       endif()
-      if(TARGET ${item})
-        get_target_property(aliased ${item} ALIASED_TARGET)
-        if(aliased AND aliased MATCHES "^CementSPH_")
-          string(REGEX REPLACE "^CementSPH_" "" linked "${aliased}")
-          list(APPEND dependsOn ${linked})
-          continue()
+      if(item MATCHES "^CementSPH_" AND TARGET ${item}) # a module named by its target, not its alias
+        get_target_property(linked ${item} EXPORT_NAME)
+        if(NOT linked)
+          string(REGEX REPLACE "^CementSPH_" "" linked "${item}") # not exported: named in the error below
         endif()
+        list(APPEND dependsOn ${linked})
+        continue()
       endif()
       if(IS_ABSOLUTE "${item}")
         continue() # a library file (libz, libOSMesa): linked by path, nothing to find
@@ -140,14 +139,12 @@ function(_cementsph_install_package)
     list(REMOVE_DUPLICATES dependsOn)
     list(REMOVE_DUPLICATES packages)
     list(REMOVE_DUPLICATES vtkModules)
-    list(APPEND CEMENTSPH_CONFIG_VTK_COMPONENTS ${vtkModules})
     set(_cementsph_depends_${component} ${dependsOn})
     string(APPEND _cementsph_component_table
       "set(_CementSPH_${component}_COMPONENTS \"${dependsOn}\")\n"
       "set(_CementSPH_${component}_PACKAGES \"${packages}\")\n"
       "set(_CementSPH_${component}_VTK_MODULES \"${vtkModules}\")\n")
   endforeach()
-  list(REMOVE_DUPLICATES CEMENTSPH_CONFIG_VTK_COMPONENTS)
 
   # The components in an order where each comes after every component it links: the config includes the
   # targets files in this order, since each checks that the targets it refers to exist.
