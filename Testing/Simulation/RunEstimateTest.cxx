@@ -52,12 +52,12 @@ TEST(RunEstimate, TinyDisplacementLimitIsRefusedUnlessAllowed) {
 
 TEST(RunEstimate, TheVoxelGridDefaultIsEstimatedByItsVoxels) {
   // The default scene is creeping flow: auto runs the voxel-grid Darcy filling. A 40 mm cube of 0.5 mm^3
-  // voxels: 128000 voxels (160 bytes each: 20.48 MB); 1 ml fills at least 1000 / 0.5 = 2000 of them.
+  // voxels: 128000 voxels; 1 ml fills at least 1000 / 0.5 = 2000 of them. (The bytes per voxel are checked
+  // against a measured peak in RunEstimateMemoryTest, not against the estimator's own constant here.)
   const RunEstimate e = estimateRun(scene(0.5), 0.5);
   ASSERT_TRUE(e.voxelDarcy);
   EXPECT_NEAR(e.voxels, 128000.0, 1e-6);
   EXPECT_NEAR(e.cementVoxels, 2000.0, 1e-9);
-  EXPECT_NEAR(e.voxelMemoryBytes, 160.0 * 128000.0, 1e-3);
   EXPECT_EQ(checkRunSize(e, false), ""); // seconds, not worth a note
   // 200 ml is long in particle steps (1.6e5 particles emitted one per step) but not for the voxel model.
   SceneConfig big = scene(0.57);

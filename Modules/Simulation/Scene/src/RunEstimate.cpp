@@ -26,10 +26,11 @@ constexpr double kBytesPerFieldNode = 32, kFieldVolumeOverCementVolume = 4;
 constexpr double kParticleStepsPerSecond = 3.6e4;
 // The voxel-grid Darcy filling: its arrays (VoxelDarcyFilling.h: porosity, permeability, state, fill,
 // pressure, viscosity, arrival, face fluxes, numbering; the ROI's solid mask, kept solid centres and the
-// simulated CT) are about 160 bytes per ROI voxel. Its work: about max(100, 3 n^(1/3)) pressure solves for
+// simulated CT) and the run's other buffers peak at about 200 bytes per ROI voxel (RunEstimateMemoryTest
+// measures the peak resident memory of a 512 000-voxel run: 206 bytes per voxel on 2026-12-03). Its work: about max(100, 3 n^(1/3)) pressure solves for
 // n cement voxels (139 for the 5 ml phantom scene, 47 600 voxels), each ~100 CG iterations over half of them
 // on average; measured 3.5e8 voxel-iterations in 2.64 s (1.3e8 per second, one core with the other busy).
-constexpr double kBytesPerVoxel = 160, kVoxelIterationsPerSecond = 1.3e8;
+constexpr double kBytesPerVoxel = 200, kVoxelIterationsPerSecond = 1.3e8;
 // InjectionRunner's overdamped move limit when the scene does not set max_displacement_over_h.
 constexpr double kDefaultMaxDisplacementOverH = 0.25;
 
