@@ -10,11 +10,17 @@ int compare(const char* name, double got, double expected, double tolerance) {
   return ok ? 0 : 1;
 }
 
-#if defined(CONSUMER_GROUP_SPH)
-// A component exposes only its own headers (include/CementSPH/<component>): SPH's consumer cannot see DRR's.
-#if __has_include("cementsph/drr/DRRGeometry.h")
-#error "the SPH component's include folder exposes DRR's headers"
+// A component exposes only its own headers (include/CementSPH/<component>) and those of the components it
+// links publicly: SPH's consumer cannot see DRR's or ImagingIO's, ImagingIO's cannot see SPH's, and DRR's
+// cannot see SurfaceMetrics' (which DRR links privately) nor ImagingIO's.
+#if defined(CONSUMER_GROUP_SPH) && (__has_include("cementsph/drr/DRRGeometry.h") || __has_include("cementsph/imaging/VolumeIO.h"))
+#error "the SPH component's include folders expose other modules' headers"
 #endif
+#if defined(CONSUMER_GROUP_IMAGINGIO) && __has_include("cementsph/sph/Kernels.h")
+#error "the ImagingIO component's include folders expose SPH's headers"
+#endif
+#if defined(CONSUMER_GROUP_DRR) && (__has_include("cementsph/surfacemetrics/VolumeMetrics.h") || __has_include("cementsph/imaging/VolumeIO.h"))
+#error "the DRR component's include folders expose SurfaceMetrics' or ImagingIO's headers"
 #endif
 
 int main() {
