@@ -1,8 +1,11 @@
 // writeDicomSeries: one int16 CT slice per file with the geometry in Image Position / Orientation
 // Patient, following ITK's ResampleDICOM example (per-slice dictionaries, one study/series UID).
+// The series is written into a staging folder and moved into place whole (StagedFolder.h): a failed write
+// leaves no partial series, and an earlier, longer series' slices do not mix with this one's.
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/LibraryMessages.h"
+#include "cementsph/imaging/StagedFolder.h"
 
 #include <sys/resource.h>
 #include <sys/statvfs.h>
@@ -18,6 +21,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -45,9 +49,16 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
   namespace fs = std::filesystem;
   using ShortImage = itk::Image<std::int16_t, 3>;
   using SliceImage = itk::Image<std::int16_t, 2>;
-  std::error_code ec;
-  fs::create_directories(directory, ec);
-  if (ec) throw std::runtime_error(directory + ": cannot create directory: " + ec.message());
+  fs::path target = fs::path(directory).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path(); // "dir/series/" names "dir/series"
+  std::optional<StagedFolder> staging;
+  try {
+    staging.emplace(target);
+  } catch (const std::exception&) {
+    throw OutputError(directory + ": cannot create the folder for the DICOM series (no permission, or a file in "
+                                  "the way?); choose another folder");
+  }
+  StagedFolder& staged = *staging;
 
   // HU as int16 (rounded, clamped). GDCMImageIO applies the inverse of the Rescale Slope/Intercept
   // found in the dictionary on write (ITK 4.7 migration note "Apply Rescale Slope / Intercept On
@@ -98,7 +109,7 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
     itk::EncapsulateMetaData<std::string>(d, "0028|0004", "MONOCHROME2"); // grey levels, bright = dense
     char name[32];
     std::snprintf(name, sizeof name, "slice%04u.dcm", z);
-    files[z] = (fs::path(directory) / name).string();
+    files[z] = (staged.path() / name).string();
   }
 
   // GDCM asserts (SIGABRT) when a write fails part way, e.g. on a full filesystem or past the file size limit,
@@ -108,7 +119,7 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
     const std::uintmax_t sliceBytes = std::uintmax_t(size[0]) * size[1] * 2 + 4096;
     const std::uintmax_t needed = sliceBytes * size[2] + sliceBytes * size[2] / 10;
     struct statvfs fsInfo {};
-    if (statvfs(directory.c_str(), &fsInfo) == 0) {
+    if (statvfs(staged.path().c_str(), &fsInfo) == 0) {
       const std::uintmax_t available = std::uintmax_t(fsInfo.f_bavail) * fsInfo.f_frsize;
       if (available < needed)
         throw OutputError(directory + ": not enough room for the DICOM series (" + std::to_string(needed >> 20) +
@@ -134,8 +145,20 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
     writer->Update();
   } catch (const itk::ExceptionObject& e) {
     if (libraryMessagesVerbose()) std::cerr << oneLine(e.GetDescription()) << "\n"; // ITK's words: --verbose only
-    throw std::runtime_error(directory + ": cannot write the DICOM series (disk full, file size limit or no "
-                                         "permission?)");
+    throw OutputError(directory + ": cannot write the DICOM series (disk full, file size limit or no permission?); "
+                                  "nothing was written");
+  }
+  // A slice that came out empty or short lost its data without a word (a full disk): not a series.
+  for (const std::string& file : files) {
+    std::error_code ec;
+    if (fs::file_size(file, ec) < std::uintmax_t(size[0]) * size[1] * 2 || ec)
+      throw OutputError(directory + ": a DICOM slice came out short (disk full?); nothing was written");
+  }
+  try {
+    staged.publish({"slice####.dcm"});
+  } catch (const std::exception&) {
+    throw OutputError(directory + ": cannot move the DICOM series into place (a folder in the way, or no "
+                                  "permission?)");
   }
 }
 
