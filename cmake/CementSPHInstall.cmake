@@ -13,13 +13,30 @@ include(CMakePackageConfigHelpers)
 
 set(CEMENTSPH_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/CementSPH)
 
-# Library target -> its component (the name after CementSPH::, as the in-tree aliases).
-set(CEMENTSPH_EXPORTED_LIBRARIES
-  CementSPH_Provenance:Provenance CementSPH_SPH:SPH CementSPH_VoxelDarcy:VoxelDarcy CementSPH_Rendering:Rendering
-  CementSPH_SurfaceMetrics:SurfaceMetrics CementSPH_ImagingIO:ImagingIO CementSPH_Registration:Registration
-  CementSPH_Segmentation:Segmentation CementSPH_Anatomy:Anatomy CementSPH_Scene:Scene CementSPH_CTScene:CTScene
-  CementSPH_Phantom:Phantom CementSPH_Study:Study CementSPH_Planning:Planning CementSPH_Parallel:Parallel
-  CementSPH_DRR:DRR CementSPH_Pipeline:Pipeline)
+# The components: every library target named CementSPH_<component> defined under Modules/ (each module's
+# CMakeLists.txt, in add_subdirectory order), exported as CementSPH::<component> like its in-tree alias. A new
+# module joins the package without an edit here.
+function(_cementsph_module_libraries outVar)
+  set(result)
+  set(directories ${PROJECT_SOURCE_DIR})
+  while(directories)
+    list(POP_FRONT directories directory)
+    get_property(subdirectories DIRECTORY ${directory} PROPERTY SUBDIRECTORIES)
+    list(APPEND directories ${subdirectories})
+    if(NOT directory MATCHES "^${PROJECT_SOURCE_DIR}/Modules/")
+      continue()
+    endif()
+    get_property(targets DIRECTORY ${directory} PROPERTY BUILDSYSTEM_TARGETS)
+    foreach(target IN LISTS targets)
+      get_target_property(type ${target} TYPE)
+      if(type MATCHES "^(STATIC|SHARED)_LIBRARY$" AND target MATCHES "^CementSPH_(.+)$")
+        list(APPEND result "${target}:${CMAKE_MATCH_1}") # CMAKE_MATCH_1: the last MATCHES' group
+      endif()
+    endforeach()
+  endwhile()
+  set(${outVar} ${result} PARENT_SCOPE)
+endfunction()
+_cementsph_module_libraries(CEMENTSPH_EXPORTED_LIBRARIES)
 # Static libraries carry their private usage requirements into the export ($<LINK_ONLY:...>), so the two
 # interface targets of compile flags go along in a file every component loads (they add nothing to a
 # consumer's compile or link).
@@ -53,6 +70,34 @@ function(_cementsph_package_of item outPackage)
     set(package CLI11)
   endif()
   set(${outPackage} "${package}" PARENT_SCOPE)
+endfunction()
+
+# Whether find_package(VTK COMPONENTS <module>) needs the C language in a consumer. VTK's config finds the
+# packages of every module in the requested modules' dependency closure (public, private, optional and
+# forward links: VTK-vtk-module-find-packages.cmake), and Debian's VTK has modules whose packages are found
+# through C: mpi (FindMPI's C part, e.g. reached from the rendering modules), hdf5 and netcdf. Without C
+# that find fails and VTK::mpi's link to MPI::MPI_C stops the consumer's generate step.
+function(_cementsph_vtk_needs_c module outVar)
+  set(stack ${module})
+  set(seen)
+  set(found FALSE)
+  while(stack)
+    list(POP_BACK stack current)
+    string(REGEX REPLACE "^VTK::" "" current "${current}")
+    if(current MATCHES "^(mpi|hdf5|netcdf)$")
+      set(found TRUE)
+      break()
+    endif()
+    if(current IN_LIST seen OR NOT TARGET VTK::${current})
+      continue()
+    endif()
+    list(APPEND seen ${current})
+    foreach(property depends private_depends optional_depends forward_link)
+      get_property(next TARGET VTK::${current} PROPERTY INTERFACE_vtk_module_${property})
+      list(APPEND stack ${next})
+    endforeach()
+  endwhile()
+  set(${outVar} ${found} PARENT_SCOPE)
 endfunction()
 
 # A function, so that its loop variables (target, component, ...) do not leak into the directories after it.
@@ -139,11 +184,24 @@ function(_cementsph_install_package)
     list(REMOVE_DUPLICATES dependsOn)
     list(REMOVE_DUPLICATES packages)
     list(REMOVE_DUPLICATES vtkModules)
+    # C: ITK's config runs FindHDF5 (C test programs), MPI::MPI_C is found through C, and so are the
+    # packages of some VTK modules.
+    set(needsC FALSE)
+    if("ITK" IN_LIST packages OR "MPI" IN_LIST packages)
+      set(needsC TRUE)
+    endif()
+    foreach(module IN LISTS vtkModules)
+      _cementsph_vtk_needs_c(${module} vtkNeedsC)
+      if(vtkNeedsC)
+        set(needsC TRUE)
+      endif()
+    endforeach()
     set(_cementsph_depends_${component} ${dependsOn})
     string(APPEND _cementsph_component_table
       "set(_CementSPH_${component}_COMPONENTS \"${dependsOn}\")\n"
       "set(_CementSPH_${component}_PACKAGES \"${packages}\")\n"
-      "set(_CementSPH_${component}_VTK_MODULES \"${vtkModules}\")\n")
+      "set(_CementSPH_${component}_VTK_MODULES \"${vtkModules}\")\n"
+      "set(_CementSPH_${component}_NEEDS_C ${needsC})\n")
   endforeach()
 
   # The components in an order where each comes after every component it links: the config includes the
@@ -167,7 +225,7 @@ function(_cementsph_install_package)
     endforeach()
     if(NOT progress)
       message(FATAL_ERROR "cmake/CementSPHInstall.cmake: the components ${_cementsph_pending} link each other in a "
-        "cycle or link a CementSPH library that is not in CEMENTSPH_EXPORTED_LIBRARIES; add it there or break the cycle.")
+        "cycle or link a CementSPH library that is not defined under Modules/ (not exported); move it there or break the cycle.")
     endif()
   endwhile()
   set(CEMENTSPH_CONFIG_COMPONENTS "${_cementsph_ordered}")

@@ -5,7 +5,8 @@
 #   cmake -DSTEP=consumer -DPREFIX=<dir> -DGROUP=<sph|imagingio|ctscene|drr|all|unknown> -DCONSUMER_SOURCE=<dir>
 #         -DWORK_DIR=<dir> -P RunConsumer.cmake
 #     configures, builds and runs the consumer project for GROUP against PREFIX only (CMAKE_PREFIX_PATH; the
-#     source tree is never named). GROUP unknown must fail to configure, naming the unknown component.
+#     source tree is never named). GROUP unknown must fail to configure, naming the unknown component; GROUP
+#     each configures and links the consumer once per installed component, that component alone.
 foreach(var STEP PREFIX)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "RunConsumer.cmake: ${var} is not set")
@@ -28,7 +29,7 @@ if(STEP STREQUAL "install")
   step("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${PREFIX})
   foreach(file lib/cmake/CementSPH/CementSPHConfig.cmake lib/cmake/CementSPH/CementSPHBuildFlagsTargets.cmake
                lib/cmake/CementSPH/CementSPHSPHTargets.cmake lib/cmake/CementSPH/CementSPHDRRTargets.cmake
-               include/CementSPH/SPH/cementsph/sph/HagenPoiseuille.h include/CementSPH/DRR/cementsph/drr/vtkDRRFilter.h
+               include/CementSPH/SPH/cementsph/sph/Kernels.h include/CementSPH/DRR/cementsph/drr/vtkDRRFilter.h
                include/CementSPH/CTScene/vtkSPHInjectionFilter.h lib/libCementSPH_SPH.a)
     if(NOT EXISTS ${PREFIX}/${file})
       file(GLOB_RECURSE found RELATIVE ${PREFIX} ${PREFIX}/*)
@@ -69,6 +70,26 @@ if(GROUP STREQUAL "unknown")
       "configure returned ${rc}:\n${out}\n${err}")
   endif()
   message(STATUS "unknown component refused: ok")
+  return()
+endif()
+
+if(GROUP STREQUAL "each")
+  # Every component by itself in a C++-only project: its package finds (and the C the config enables) must
+  # be enough to generate and link. The list is the installed config's own.
+  file(READ ${PREFIX}/lib/cmake/CementSPH/CementSPHConfig.cmake config)
+  string(REGEX MATCH "set\\(_CementSPH_ALL_COMPONENTS \"([^\"]*)\"\\)" line "${config}")
+  set(components "${CMAKE_MATCH_1}")
+  list(LENGTH components count)
+  if(count LESS 10)
+    message(FATAL_ERROR "read ${count} components from the installed CementSPHConfig.cmake: '${line}'")
+  endif()
+  foreach(component IN LISTS components)
+    set(step_directory ${WORK_DIR})
+    step("configure consumer (${component} alone)" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE} -B ${WORK_DIR}/${component}
+         -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${PREFIX} -DCONSUMER_GROUP=one -DCONSUMER_COMPONENT=${component})
+    step("link consumer (${component} alone)" ${CMAKE_COMMAND} --build ${WORK_DIR}/${component})
+  endforeach()
+  message(STATUS "each of the ${count} components configured and linked alone: ok")
   return()
 endif()
 

@@ -2,7 +2,7 @@
 // compared. Every expected value is computed here from the law or the set-up, not taken from CementSPH.
 #pragma once
 
-int checkSph();       // SphCheck.cpp: kernel normalisation, Hagen-Poiseuille
+int checkSph();       // SphCheck.cpp: kernel normalisation and derivative
 int checkImagingIO(); // ImagingIOCheck.cpp: NRRD round trip of an analytic volume
 int checkCTScene();   // CTSceneCheck.cpp: porous solid of a two-slab CT, counted by hand
 int checkDrr();       // DrrCheck.cpp: DRR of a uniform block = mu * length
