@@ -39,6 +39,9 @@ private:
   bool failed_ = false;
 };
 
+// Refuses, before anything runs, an output path that is a file or lies under a folder we cannot write.
+void checkOutputFolder(const std::filesystem::path& out);
+
 void writeFileAtomically(const std::filesystem::path& path, const std::string& contents);
 // Dimensionless permeability against porosity with the Kozeny-Carman curve (paper Fig. 5).
 void writeDarcyPlot(const std::vector<sph::DarcyResult>& results, const std::filesystem::path& png);
