@@ -208,7 +208,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   for (const std::string& kind : kindsShown)
     if (!styled(kind))
       legend.push_back({LegendEntry::Swatch, kLeakUnknown, kind.empty() ? "leaked cement" : "leak: " + kind});
-  if (tipIndex) legend.push_back({LegendEntry::Ring, kTip, "cannula tip"});
+  if (tipIndex) legend.push_back({LegendEntry::Ring, kTip, "cannula tip (projected)"});
   if (shaftEndIndex) legend.push_back({LegendEntry::Line, kTrajectory, "trajectory (projected)"});
   if (vertebraShown) legend.push_back({LegendEntry::Outline, kVertebra, "vertebra"});
 

@@ -157,7 +157,7 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
       // Voxel x runs to the right, y downwards; the letters say where they run in the patient.
       detail::PanelAnnotation a;
       std::ostringstream title;
-      title << rowNames[r] << "  " << detail::planeName(direction, 2) << " z = " << std::fixed << std::setprecision(1)
+      title << rowNames[r] << ", " << detail::planeName(direction, 2) << " z = " << std::fixed << std::setprecision(1)
             << z[c] << " mm";
       a.title = title.str();
       a.left = detail::patientLetter(direction, 0, -1);
