@@ -32,8 +32,8 @@ fi
 mkdir -p "$out/obj" "$out/bin" "$out/findings"
 
 # ---- build ----
-sph_src=$(cd "$here" && find Modules/Core/SPH/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
-includes="-I$here/Modules/Core/SPH/include -I$here/Modules/Simulation/Scene/include -I$here/Modules/Imaging/IO/src \
+sph_src=$(cd "$here" && find Modules/Core/Rheology/src Modules/Core/SPH/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
+includes="-I$here/Modules/Core/Rheology/include -I$here/Modules/Core/SPH/include -I$here/Modules/Simulation/Scene/include -I$here/Modules/Imaging/IO/src \
 -I$here/Testing/Fuzz/targets -isystem /usr/include/eigen3"
 # Unit suites built here: those of Testing/Core/SPH and Testing/Simulation labelled unit that link only
 # CementSPH::SPH or CementSPH::Scene (name:source).

@@ -23,7 +23,7 @@ struct InjectionScene {
   // Runs until simulation time `until` [s]: viscosity from the schedule, emission, one step, a pressure sample.
   void runUntil(double until, const std::function<void()>& afterStep = {}) {
     while (sim->time() < until) {
-      viscosity.apply(*sim, emitter.spec().startTime);
+      sim->setViscosity(viscosity.at(sim->time() - emitter.spec().startTime));
       emitter.emit(*sim);
       sim->step();
       probe.sample(*sim);

@@ -88,9 +88,9 @@ TEST(ViscositySchedule, RejectsBadInputWithClearMessages) {
   EXPECT_NE(negative.find("point 1"), std::string::npos);
 }
 
-TEST(ViscositySchedule, AppliesToTheSimulation) {
+TEST(ViscositySchedule, SetsTheSimulationsViscosity) {
   auto sim = periodicLattice(baseModel(1e-3), 6, 1e-3);
-  ViscositySchedule::linear(50, 2).apply(*sim, -10.0); // 10 s after the start of injection
+  sim->setViscosity(ViscositySchedule::linear(50, 2).at(10.0)); // 10 s after the start: 50 + 2 x 10 by hand
   EXPECT_DOUBLE_EQ(sim->parameters().viscosity, 70.0);
 }
 

@@ -11,7 +11,7 @@
 //  * the active-set bookkeeping (issue 23) against dense passes over every voxel: the cement volume, the
 //    voxels with cement, the viscosity after a change, and the same fill in a region three times as wide.
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
-#include "cementsph/sph/Viscosity/Rheology.h"
+#include "cementsph/rheology/Rheology.h"
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -168,7 +168,7 @@ TEST(VoxelDarcyFilling, ACementThatCannotGoOnIsAClearError) {
 }
 
 // Radial power-law Darcy flow (issue "Cement rheology"): with mu = K gamma_dot^(n-1) and the Darcy-scale
-// shear rate gamma_dot = alpha q / sqrt(k phi) (sph::darcyShearRate), |grad p| = C q^n with
+// shear rate gamma_dot = alpha q / sqrt(k phi) (rheology::darcyShearRate), |grad p| = C q^n with
 // C = K alpha^(n-1) (k phi)^((1-n)/2) / k and q = Q / (4 pi r^2), so outside the outlet
 // p(r) = C (Q / 4 pi)^n (r^(1-2n) - R^(1-2n)) / (2n - 1): the profile follows r^(1-2n), and at the same
 // volume (the same R) the pressure scales as Q^n.
@@ -178,12 +178,12 @@ struct PowerLawRun {
 };
 
 PowerLawRun injectPowerLaw(double n, double flowRate, double volume, double minimum = 1e-3, double maximum = 1e9) {
-  sph::RheologyParameters p;
+  rheology::RheologyParameters p;
   p.consistencyPaSn = kMu;
   p.flowIndex = n;
   p.minimumViscosityPaS = minimum;
   p.maximumViscosityPaS = maximum;
-  std::shared_ptr<const sph::Rheology> law = sph::makeRheology("power-law", p);
+  std::shared_ptr<const rheology::Rheology> law = rheology::makeRheology("power-law", p);
   PowerLawRun run{VoxelDarcyFilling(cube(1.0, kK)), std::cbrt(3 * volume / (4 * kPi))};
   run.filling.setSource(Eigen::Vector3d::Zero(), 1.5e-3);
   run.filling.setViscosity(kMu);

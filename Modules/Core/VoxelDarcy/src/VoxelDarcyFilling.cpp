@@ -1,6 +1,6 @@
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
 
-#include "cementsph/sph/Viscosity/Rheology.h"
+#include "cementsph/rheology/Rheology.h"
 
 #include <algorithm>
 #include <chrono>
@@ -325,7 +325,7 @@ void VoxelDarcyFilling::setShearRateViscosity(std::function<double(double)> law,
 void VoxelDarcyFilling::updateShearViscosity() {
   for (std::size_t c : filled_) {
     const double q = darcyVelocity(c).norm();
-    const double mu = shearLaw_(sph::darcyShearRate(q, medium_.permeability[c], medium_.porosity[c], flowIndex_));
+    const double mu = shearLaw_(rheology::darcyShearRate(q, medium_.permeability[c], medium_.porosity[c], flowIndex_));
     if (!(mu > 0) || !std::isfinite(mu))
       throw FillingError("voxel Darcy: the viscosity law gave " + std::to_string(mu) + " Pa s at " + mm(medium_.centre(c)));
     viscosity_[c] = mu;

@@ -153,9 +153,9 @@ public:
   void setEntryPressure(std::vector<float> entryPressurePa);
   void setVoxelViscosity(std::vector<double> viscosityPaS);
   // A shear-thinning cement: each voxel's viscosity mu(gamma_dot) from its Darcy-scale shear rate
-  // (sph::darcyShearRate with the law's flow index), re-evaluated `picardIterations` times per step (solve,
+  // (rheology::darcyShearRate with the law's flow index), re-evaluated `picardIterations` times per step (solve,
   // shear rates from the new fluxes, viscosities, solve again); the first evaluation uses the last step's
-  // fluxes. `law` must return a finite positive bounded viscosity (sph::Rheology::viscosity does). An empty
+  // fluxes. `law` must return a finite positive bounded viscosity (rheology::Rheology::viscosity does). An empty
   // law goes back to the viscosity set by setViscosity.
   void setShearRateViscosity(std::function<double(double)> law, double flowIndex, int picardIterations = 3);
 

@@ -123,7 +123,7 @@ public:
   // both presets keep their step sequence (VALIDATION.md).
   // The outlet is sampled once after each step (the probe keeps its samples for the paper's baseline).
   void advance(double) override {
-    viscosity_->apply(*sim_, spec_.startTime);
+    sim_->setViscosity(viscosity_->at(sim_->time() - spec_.startTime));
     emitter_->emit(*sim_);
     sim_->step();
     const double mu = sim_->parameters().viscosity;

@@ -1,23 +1,10 @@
-// Power-law (Ostwald-de Waele) cement: mu = K gamma_dot^(n - 1), K the consistency [Pa s^n], n the flow index
-// (n < 1 shear-thinning: PMMA cements, the paper's "usually captured using a power law").
+// Moved to the Rheology module (Modules/Core/Rheology, namespace cementsph::rheology), which both injection
+// engines use; this header keeps code written against cementsph::sph compiling. New code includes
+// "cementsph/rheology/PowerLaw.h".
 #pragma once
 
-#include "cementsph/sph/Viscosity/Rheology.h"
-
-#include <cmath>
+#include "cementsph/rheology/PowerLaw.h"
 
 namespace cementsph::sph {
-
-class PowerLaw : public Rheology {
-public:
-  PowerLaw(double consistencyPaSn, double flowIndex) : k_(consistencyPaSn), n_(flowIndex) {}
-  std::string name() const override { return "power-law"; }
-  double unbounded(double gammaDot) const override { return k_ * std::pow(gammaDot, n_ - 1.0); }
-  double flowIndex() const override { return n_; }
-  double consistency() const { return k_; }
-
-private:
-  double k_, n_;
-};
-
+using rheology::PowerLaw;
 } // namespace cementsph::sph

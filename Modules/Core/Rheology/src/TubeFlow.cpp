@@ -1,4 +1,4 @@
-#include "cementsph/sph/TubeFlow.h"
+#include "cementsph/rheology/TubeFlow.h"
 
 #include <cctype>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-namespace cementsph::sph {
+namespace cementsph::rheology {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -147,4 +147,4 @@ std::string knownCannulaGauges() {
   return s;
 }
 
-} // namespace cementsph::sph
+} // namespace cementsph::rheology

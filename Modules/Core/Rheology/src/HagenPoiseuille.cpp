@@ -1,14 +1,15 @@
-#include "cementsph/sph/HagenPoiseuille.h"
-
-#include "cementsph/sph/Kernels.h" // kPi
+#include "cementsph/rheology/HagenPoiseuille.h"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-namespace cementsph::sph {
+namespace cementsph::rheology {
 
 namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
 void requirePositive(double v, const char* what) {
   if (!(std::isfinite(v) && v > 0))
     throw std::invalid_argument(std::string("Hagen-Poiseuille: ") + what + " must be positive and finite");
@@ -39,4 +40,4 @@ double boreSpeed(double flowRateM3PerS, double diameterM) {
   return flowRateM3PerS / (0.25 * kPi * diameterM * diameterM);
 }
 
-} // namespace cementsph::sph
+} // namespace cementsph::rheology

@@ -1,10 +1,10 @@
-#include "cementsph/sph/Viscosity/Curing.h"
+#include "cementsph/rheology/Curing.h"
 
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-namespace cementsph::sph {
+namespace cementsph::rheology {
 
 const std::vector<BundledCement>& bundledCements() {
   // Nicholas et al. 2007 (Curing.h): 8.7 and 13 min at 25 C, about half at 37 C; 75e3 Pa s for all.
@@ -79,4 +79,4 @@ double CuringCurve::factor(double t) const {
   return rows_.back().second;
 }
 
-} // namespace cementsph::sph
+} // namespace cementsph::rheology

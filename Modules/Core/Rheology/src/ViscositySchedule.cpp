@@ -1,13 +1,11 @@
-#include "cementsph/sph/ViscositySchedule.h"
-
-#include "cementsph/sph/Simulation.h"
+#include "cementsph/rheology/ViscositySchedule.h"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-namespace cementsph::sph {
+namespace cementsph::rheology {
 
 namespace {
 void requirePositiveViscosity(double mu, const std::string& where) {
@@ -82,8 +80,4 @@ double ViscositySchedule::at(double timeS) const {
   return mu0_;
 }
 
-void ViscositySchedule::apply(Simulation& sim, double injectionStartS) const {
-  sim.setViscosity(at(sim.time() - injectionStartS));
-}
-
-} // namespace cementsph::sph
+} // namespace cementsph::rheology
