@@ -1,14 +1,14 @@
 // cementsph phantom: a synthetic open-cell foam CT and its post-injection CT (issue 4; Basafa et al. 2013,
 // "Foam Block Tests"). Writes DIR/pre.nrrd, DIR/post.nrrd (unless --no-post; --post-dicom adds DIR/post_dicom/)
 // and DIR/truth.json (every key names its unit). Modules/Simulation/Phantom; docs/phantom-figures.md.
+// A thin layer: the phantoms and truth.json's schema are CementSPH::Phantom's (PhantomFiles.h); this file turns
+// the options into the phantoms' options, writes the command that makes the files again, and prints a summary.
 #include "CommandRegistry.h"
-#include "OutputFiles.h"
+#include "SceneOverrides.h"
 
-#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/phantom/FoamPhantom.h"
+#include "cementsph/phantom/PhantomFiles.h"
 #include "cementsph/phantom/VertebraPhantom.h"
-
-#include <nlohmann/json.hpp>
 
 #include <omp.h>
 
@@ -22,6 +22,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace cementsph::phantom;
 
 struct PhantomArgs {
   std::string out;
@@ -33,72 +34,167 @@ struct PhantomArgs {
   int threads = 0;
   std::string kind = "foam";
   double foramenDiameterMm = 3.0;
+  // The vertebra's anatomy variant (issue 20): 0 = off, as the module's defaults.
+  double marrowFatRadiusMm = 0.0, discHeightMm = 0.0, veinRadiusMm = 0.0;
 };
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The vertebra: pre.nrrd, the same as a DICOM series in pre_dicom/, and truth.json (geometry, plan, command).
-int runVertebra(const PhantomArgs& a, bool noiseGiven) {
-  using namespace cementsph::phantom;
-  VertebraOptions vo;
-  if (noiseGiven) vo.noiseHu = a.noiseHu; // else the vertebra's own default (the foam's is higher)
-  vo.seed = a.seed;
-  vo.foramenDiameterMm = a.foramenDiameterMm;
+// Runs validate(); its message names a key ("disc_height_mm must be ..."): the user typed the option.
+template <typename Validate> void validateNamingTheOption(const Validate& validate) {
   try {
-    vo.validate();
+    validate();
   } catch (const std::invalid_argument& e) {
     std::string m = e.what();
     for (auto& c : m)
       if (c == '_') c = '-';
     throw std::invalid_argument("--" + m);
   }
-  const fs::path out(a.out);
-  if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error(a.out + ": exists and is not a directory");
-  const auto t0 = std::chrono::steady_clock::now();
-  const VertebraResult v = makeVertebra(vo);
-  nlohmann::json truth;
-  truth["kind"] = "vertebra";
-  truth["vertebra"] = v.toJson();
-  truth["vertebra"]["spacing_mm"] = vo.spacingMm;
-  truth["vertebra"]["field_mm"] = vo.fieldMm;
-  truth["vertebra"]["cortical_hu"] = vo.corticalHu;
-  truth["vertebra"]["trabecular_centre_hu"] = vo.trabecularCentreHu;
-  truth["vertebra"]["trabecular_rim_hu"] = vo.trabecularRimHu;
-  truth["vertebra"]["canal_hu"] = vo.canalHu;
-  truth["vertebra"]["soft_tissue_hu"] = vo.softTissueHu;
-  truth["vertebra"]["foramen_diameter_mm"] = vo.foramenDiameterMm;
-  truth["vertebra"]["noise_hu"] = vo.noiseHu;
-  truth["vertebra"]["seed"] = vo.seed;
-  truth["vertebra"]["generation_time_s"] = secondsSince(t0);
-  truth["injection"] = {{"tip_mm", v.suggestedTipMm},     {"direction", v.suggestedDirection},
-                        {"volume_ml", 4.0},               {"flow_rate_ml_per_s", 0.05},
-                        {"viscosity_pa_s", 100.0},        {"note", "a transpedicular plan for the demo"}};
+}
+
+void checkOutputPath(const std::string& out) {
+  if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error(out + ": exists and is not a directory");
+}
+
+const char* const kVariantOptions[] = {"--marrow-fat-radius-mm", "--disc-height-mm", "--vein-radius-mm"};
+
+VertebraOptions vertebraOptions(const PhantomArgs& a, const CLI::App& sub) {
+  VertebraOptions vo;
+  if (sub.count("--noise-hu")) vo.noiseHu = a.noiseHu; // else the vertebra's own default (the foam's is higher)
+  vo.seed = a.seed;
+  vo.foramenDiameterMm = a.foramenDiameterMm;
+  vo.marrowFatRadiusMm = a.marrowFatRadiusMm;
+  vo.discHeightMm = a.discHeightMm;
+  vo.veinRadiusMm = a.veinRadiusMm;
+  try {
+    validateNamingTheOption([&] { vo.validate(); });
+  } catch (const std::invalid_argument& e) {
+    // The field is not an option: a disc that does not fit it is the disc height's fault.
+    const std::string m = e.what();
+    if (m.rfind("--field-mm", 0) != 0 || m.find("must hold") == std::string::npos) throw;
+    throw std::invalid_argument("--disc-height-mm: " + cementsph::app::exactNumber(a.discHeightMm) +
+                                " mm does not fit: the vertebra phantom's field (" +
+                                cementsph::app::exactNumber(vo.fieldMm[2]) + " mm high) " +
+                                m.substr(m.find("must hold")) + "; give a smaller height");
+  }
+  return vo;
+}
+
+// The command that makes these files again (generation times aside), with every option spelled out.
+std::string vertebraCommandLine(const PhantomArgs& a, const VertebraOptions& vo) {
   std::ostringstream command;
   command << "cementsph phantom --kind vertebra --out " << a.out << " --noise-hu " << vo.noiseHu << " --seed " << vo.seed
           << " --foramen-diameter-mm " << vo.foramenDiameterMm;
-  truth["command"] = command.str();
-  const bool created = !fs::exists(out);
-  fs::create_directories(out);
-  std::vector<fs::path> written;
-  try {
-    cementsph::imaging::writeVolume(v.ct, (out / "pre.nrrd").string());
-    written.push_back(out / "pre.nrrd");
-    fs::remove_all(out / "pre_dicom");
-    written.push_back(out / "pre_dicom");
-    cementsph::imaging::writeDicomSeries(v.ct, (out / "pre_dicom").string(), -1024.0);
-    cementsph::app::writeFileAtomically(out / "truth.json", truth.dump(2) + "\n");
-  } catch (...) {
-    std::error_code ec;
-    for (const auto& p : written) fs::remove_all(p, ec);
-    if (created) fs::remove(out, ec);
-    throw;
-  }
+  if (vo.marrowFatRadiusMm > 0) command << " --marrow-fat-radius-mm " << vo.marrowFatRadiusMm;
+  if (vo.discHeightMm > 0) command << " --disc-height-mm " << vo.discHeightMm;
+  if (vo.veinRadiusMm > 0) command << " --vein-radius-mm " << vo.veinRadiusMm;
+  return command.str();
+}
+
+// The vertebra: pre.nrrd, the same as a DICOM series in pre_dicom/, and truth.json (geometry, plan, command).
+int runVertebra(const PhantomArgs& a, const CLI::App& sub) {
+  const VertebraOptions vo = vertebraOptions(a, sub);
+  checkOutputPath(a.out);
+  const auto t0 = std::chrono::steady_clock::now();
+  const VertebraResult v = makeVertebra(vo);
+  PhantomFiles files;
+  files.truth = vertebraTruthJson(vo, v, secondsSince(t0));
+  files.truth["command"] = vertebraCommandLine(a, vo);
+  files.volumes = {{"pre.nrrd", v.ct}};
+  files.dicomSeries = {{"pre_dicom", v.ct}};
+  writePhantomFiles(a.out, files);
   const auto size = v.ct->GetLargestPossibleRegion().GetSize();
   std::cout << "vertebra " << size[0] << " x " << size[1] << " x " << size[2] << " voxels of " << vo.spacingMm[0] << " x "
             << vo.spacingMm[1] << " x " << vo.spacingMm[2] << " mm; suggested tip " << v.suggestedTipMm[0] << ","
             << v.suggestedTipMm[1] << "," << v.suggestedTipMm[2] << " mm; results in " << a.out << "\n";
+  return 0;
+}
+
+FoamOptions foamOptions(const PhantomArgs& a, const CLI::App& sub) {
+  FoamOptions fo;
+  if (a.sizeMm.size() == 1) fo.sizeMm = {a.sizeMm[0], a.sizeMm[0], a.sizeMm[0]};
+  else if (a.sizeMm.size() == 3) fo.sizeMm = {a.sizeMm[0], a.sizeMm[1], a.sizeMm[2]};
+  else if (!a.sizeMm.empty()) throw std::invalid_argument("--size-mm takes one value or three (x,y,z)");
+  fo.cellSizeMm = a.cellSizeMm;
+  if (sub.count("--strut-thickness-mm")) {
+    if (sub.count("--porosity")) throw std::invalid_argument("give --porosity or --strut-thickness-mm, not both");
+    fo.porosity.reset();
+    fo.strutThicknessMm = a.strutThicknessMm;
+  } else {
+    fo.porosity = a.porosity;
+  }
+  fo.shellMm = a.shellMm;
+  fo.airMarginMm = a.airMarginMm;
+  fo.noiseHu = a.noiseHu;
+  fo.seed = a.seed;
+  return fo;
+}
+
+std::string foamCommandLine(const PhantomArgs& a, const FoamOptions& fo, const PostOptions& po) {
+  std::ostringstream command;
+  command << "cementsph phantom --out " << a.out << " --size-mm " << fo.sizeMm[0] << "," << fo.sizeMm[1] << ","
+          << fo.sizeMm[2] << " --cell-size-mm " << fo.cellSizeMm;
+  if (fo.porosity) command << " --porosity " << *fo.porosity;
+  else command << " --strut-thickness-mm " << *fo.strutThicknessMm;
+  command << " --shell-mm " << fo.shellMm << " --air-margin-mm " << fo.airMarginMm << " --noise-hu " << fo.noiseHu
+          << " --seed " << fo.seed;
+  if (a.noPost) command << " --no-post";
+  else command << " --volume-ml " << po.volumeMl << " --viscosity-pa-s " << po.viscosityPaS;
+  if (a.postDicom) command << " --post-dicom";
+  return command.str();
+}
+
+void printFoamSummary(const PhantomArgs& a, const FoamOptions& fo, const FoamResult& foam, const PostResult& post) {
+  const auto size = foam.ct->GetLargestPossibleRegion().GetSize();
+  std::cout << "foam " << size[0] << " x " << size[1] << " x " << size[2] << " voxels, realised porosity "
+            << foam.realisedPorosity << " (target " << (fo.porosity ? std::to_string(*fo.porosity) : "none")
+            << ", band " << foam.bandMm << " mm)";
+  if (!a.noPost)
+    std::cout << "; tip " << post.tipMm[0] << "," << post.tipMm[1] << "," << post.tipMm[2] << " mm, cement "
+              << post.cementVolumeMl << " ml in " << post.cementVoxels << " voxels";
+  std::cout << "; results in " << a.out << "\n";
+}
+
+int runFoam(const PhantomArgs& a, const CLI::App& sub) {
+  for (const char* option : kVariantOptions)
+    if (sub.count(option)) throw std::invalid_argument(std::string(option) + " applies to --kind vertebra only");
+  const FoamOptions fo = foamOptions(a, sub);
+  PostOptions po;
+  po.volumeMl = a.volumeMl;
+  po.viscosityPaS = a.viscosityPaS;
+  po.progress = !a.quiet;
+  validateNamingTheOption([&] {
+    fo.validate();
+    po.validate();
+  });
+  if (a.threads < 0) throw std::invalid_argument("--threads must be >= 0");
+  checkOutputPath(a.out);
+  if (a.threads > 0) omp_set_num_threads(a.threads);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const FoamResult foam = makeFoam(fo);
+  const double foamS = secondsSince(t0);
+  if (!a.quiet)
+    std::cerr << "foam: realised porosity " << foam.realisedPorosity << " (band " << foam.bandMm << " mm), " << foamS
+              << " s\n";
+  PhantomFiles files;
+  files.truth["foam"] = foamTruthJson(fo, foam, foamS);
+  files.truth["command"] = foamCommandLine(a, fo, po);
+  files.volumes = {{"pre.nrrd", foam.ct}};
+  PostResult post;
+  if (!a.noPost) {
+    const auto t1 = std::chrono::steady_clock::now();
+    post = makePost(foam, fo, po);
+    files.truth["misalignment"] = misalignmentTruthJson(post);
+    files.truth["injection"] = injectionTruthJson(po, post, secondsSince(t1));
+    files.volumes.push_back({"post.nrrd", post.ct});
+    if (a.postDicom) files.dicomSeries = {{"post_dicom", post.ct}};
+  }
+  // Files: created only now; on failure the files this run wrote are removed.
+  writePhantomFiles(a.out, files);
+  printFoamSummary(a, fo, foam, post);
   return 0;
 }
 
@@ -124,146 +220,18 @@ cementsph::app::CommandRunner setupPhantom(CLI::App& sub) {
   sub.add_option("--kind", a->kind, "foam (the paper's foam block, default) or vertebra (a clinical-resolution vertebra "
                                     "with cortex, canal and a basivertebral foramen: pre.nrrd, pre_dicom/, truth.json)");
   sub.add_option("--foramen-diameter-mm", a->foramenDiameterMm, "vertebra: the posterior-wall opening (default 3; 0: intact)");
+  sub.add_option("--marrow-fat-radius-mm", a->marrowFatRadiusMm,
+                 "vertebra: a sphere of marrow fat inside the body, radius 1 .. 6 mm (default 0: none)");
+  sub.add_option("--disc-height-mm", a->discHeightMm,
+                 "vertebra: disc spaces above and below the body, each this high, 4 mm up to what the 45 mm field "
+                 "holds with the neighbours' end plates (8 mm) (default 0: none)");
+  sub.add_option("--vein-radius-mm", a->veinRadiusMm,
+                 "vertebra: a basivertebral vein out through the body's posterolateral wall, radius 1 .. 3 mm "
+                 "(default 0: none)");
   return [a, &sub]() {
-    using namespace cementsph::phantom;
-    if (a->kind == "vertebra") return runVertebra(*a, sub.count("--noise-hu") > 0);
+    if (a->kind == "vertebra") return runVertebra(*a, sub);
     if (a->kind != "foam") throw std::invalid_argument("--kind must be foam or vertebra (got " + a->kind + ")");
-    FoamOptions fo;
-    if (a->sizeMm.size() == 1) fo.sizeMm = {a->sizeMm[0], a->sizeMm[0], a->sizeMm[0]};
-    else if (a->sizeMm.size() == 3) fo.sizeMm = {a->sizeMm[0], a->sizeMm[1], a->sizeMm[2]};
-    else if (!a->sizeMm.empty()) throw std::invalid_argument("--size-mm takes one value or three (x,y,z)");
-    fo.cellSizeMm = a->cellSizeMm;
-    if (sub.count("--strut-thickness-mm")) {
-      if (sub.count("--porosity")) throw std::invalid_argument("give --porosity or --strut-thickness-mm, not both");
-      fo.porosity.reset();
-      fo.strutThicknessMm = a->strutThicknessMm;
-    } else {
-      fo.porosity = a->porosity;
-    }
-    fo.shellMm = a->shellMm;
-    fo.airMarginMm = a->airMarginMm;
-    fo.noiseHu = a->noiseHu;
-    fo.seed = a->seed;
-    PostOptions po;
-    po.volumeMl = a->volumeMl;
-    po.viscosityPaS = a->viscosityPaS;
-    po.progress = !a->quiet;
-    try {
-      fo.validate();
-      po.validate();
-    } catch (const std::invalid_argument& e) {
-      // Name the command-line option, not the key.
-      std::string m = e.what();
-      for (auto& c : m)
-        if (c == '_') c = '-';
-      throw std::invalid_argument("--" + m);
-    }
-    if (a->threads < 0) throw std::invalid_argument("--threads must be >= 0");
-    const fs::path out(a->out);
-    if (fs::exists(out) && !fs::is_directory(out)) throw std::runtime_error(a->out + ": exists and is not a directory");
-    if (a->threads > 0) omp_set_num_threads(a->threads);
-
-    const auto t0 = std::chrono::steady_clock::now();
-    const FoamResult foam = makeFoam(fo);
-    const double foamS = secondsSince(t0);
-    if (!a->quiet)
-      std::cerr << "foam: realised porosity " << foam.realisedPorosity << " (band " << foam.bandMm << " mm), "
-                << foamS << " s\n";
-    nlohmann::json truth;
-    truth["foam"] = foam.toJson();
-    truth["foam"]["size_mm"] = fo.sizeMm;
-    truth["foam"]["spacing_mm"] = fo.spacingMm;
-    truth["foam"]["cell_size_mm"] = fo.cellSizeMm;
-    truth["foam"]["target_porosity"] = fo.porosity ? nlohmann::json(*fo.porosity) : nlohmann::json(nullptr);
-    truth["foam"]["shell_mm"] = fo.shellMm;
-    truth["foam"]["air_margin_mm"] = fo.airMarginMm;
-    truth["foam"]["air_hu"] = fo.airHu;
-    truth["foam"]["noise_hu"] = fo.noiseHu;
-    truth["foam"]["seed"] = fo.seed;
-    truth["foam"]["post_noise_seed"] = fo.seed + 1;
-    truth["foam"]["supersample"] = fo.supersample;
-    truth["foam"]["strut_hu"] = fo.strutHu;
-    truth["foam"]["fat_hu"] = fo.fatHu;
-    truth["foam"]["shell_hu"] = fo.shellHu;
-    const auto size = foam.ct->GetLargestPossibleRegion().GetSize();
-    truth["foam"]["voxels"] = {size[0], size[1], size[2]};
-    truth["foam"]["generation_time_s"] = foamS;
-    // The command that makes these files again (generation times aside), with every option spelled out.
-    std::ostringstream command;
-    command << "cementsph phantom --out " << a->out << " --size-mm " << fo.sizeMm[0] << "," << fo.sizeMm[1] << ","
-            << fo.sizeMm[2] << " --cell-size-mm " << fo.cellSizeMm;
-    if (fo.porosity) command << " --porosity " << *fo.porosity;
-    else command << " --strut-thickness-mm " << *fo.strutThicknessMm;
-    command << " --shell-mm " << fo.shellMm << " --air-margin-mm " << fo.airMarginMm << " --noise-hu " << fo.noiseHu
-            << " --seed " << fo.seed;
-    if (a->noPost) command << " --no-post";
-    else command << " --volume-ml " << po.volumeMl << " --viscosity-pa-s " << po.viscosityPaS;
-    if (a->postDicom) command << " --post-dicom";
-    truth["command"] = command.str();
-
-    PostResult post;
-    if (!a->noPost) {
-      const auto t1 = std::chrono::steady_clock::now();
-      post = makePost(foam, fo, po);
-      const double postS = secondsSince(t1);
-      const auto& p = post.misalignment;
-      truth["misalignment"] = {
-          {"convention", "post(y) = pre_cemented(A^-1 y); y = M (x - centre_mm) + centre_mm + translation_mm, "
-                         "M = Rz Ry Rx S; a point x of pre.nrrd appears at y in post.nrrd"},
-          {"rotation_deg", p.rotationDeg},
-          {"scale", p.scale},
-          {"translation_mm", p.translationMm},
-          {"centre_mm", p.centreMm},
-          {"matrix", p.matrix()}};
-      truth["injection"] = {{"requested_tip_mm", post.requestedTipMm},
-                            {"tip_mm", post.tipMm},
-                            {"volume_ml", po.volumeMl},
-                            {"viscosity_pa_s", po.viscosityPaS},
-                            {"flow_rate_ml_per_s", po.flowRateMlPerS},
-                            {"direction", {0, 0, 1}},
-                            {"cement_hu", po.cementHu},
-                            {"cement_threshold_rho_over_rho0", po.cementThreshold},
-                            {"cement_voxels", post.cementVoxels},
-                            {"cement_volume_ml", post.cementVolumeMl},
-                            {"volume_injected_ml", post.injectionMetrics.value("volume_injected_ml", 0.0)},
-                            {"cement_points", post.injectionMetrics.at("cement_points")},
-                            {"steps", post.injectionMetrics.at("steps")},
-                            {"numerics", toJson(po.numerics)},
-                            {"scene", post.scene},
-                            {"generation_time_s", postS}};
-    }
-
-    // Files: created only now; on failure the files this run wrote are removed.
-    const bool created = !fs::exists(out);
-    fs::create_directories(out);
-    std::vector<fs::path> written;
-    try {
-      cementsph::imaging::writeVolume(foam.ct, (out / "pre.nrrd").string());
-      written.push_back(out / "pre.nrrd");
-      if (!a->noPost) {
-        cementsph::imaging::writeVolume(post.ct, (out / "post.nrrd").string());
-        written.push_back(out / "post.nrrd");
-        if (a->postDicom) {
-          fs::remove_all(out / "post_dicom");
-          written.push_back(out / "post_dicom");
-          cementsph::imaging::writeDicomSeries(post.ct, (out / "post_dicom").string(), -1024.0);
-        }
-      }
-      cementsph::app::writeFileAtomically(out / "truth.json", truth.dump(2) + "\n");
-    } catch (...) {
-      std::error_code ec;
-      for (const auto& p : written) fs::remove_all(p, ec);
-      if (created) fs::remove(out, ec);
-      throw;
-    }
-    std::cout << "foam " << size[0] << " x " << size[1] << " x " << size[2] << " voxels, realised porosity "
-              << foam.realisedPorosity << " (target " << (fo.porosity ? std::to_string(*fo.porosity) : "none")
-              << ", band " << foam.bandMm << " mm)";
-    if (!a->noPost)
-      std::cout << "; tip " << post.tipMm[0] << "," << post.tipMm[1] << "," << post.tipMm[2] << " mm, cement "
-                << post.cementVolumeMl << " ml in " << post.cementVoxels << " voxels";
-    std::cout << "; results in " << a->out << "\n";
-    return 0;
+    return runFoam(*a, sub);
   };
 }
 
