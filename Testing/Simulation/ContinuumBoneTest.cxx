@@ -69,7 +69,7 @@ TEST(ContinuumBone, UniformBoneFillsTheBallOfItsPorosityWithDarcysPressure) {
   const auto image = ct(60, [](int i, int j, int k) {
     return box(i, j, k, 0, 59) ? 1000.f : 150.f; // intact cortex around uniform trabecular bone
   });
-  const nlohmann::json m = run(image, {{"tip_mm", {15, 15, 15}}, {"volume_ml", 1.0}});
+  const nlohmann::json m = run(image, {{"tip_mm", {15, 15, 15}}, {"direction", {0, 0, 1}}, {"volume_ml", 1.0}});
   EXPECT_EQ(m["bone_model"], "continuum") << m["bone_model_reason"];
   EXPECT_NEAR(m["porosity_at_tip"].get<double>(), porosity(150), 1e-6);
   EXPECT_NEAR(m["permeability_at_tip_m2"].get<double>() / permeability(150), 1.0, 1e-6);
@@ -94,7 +94,7 @@ struct HalfSpaces {
 HalfSpaces halfSpaces(float upperHu) {
   const auto image = ct(70, [upperHu](int i, int j, int k) { return box(i, j, k, 0, 69) ? 1000.f : k < 35 ? 100.f : upperHu; });
   vtkSmartPointer<vtkPolyData> points;
-  const nlohmann::json m = run(image, {{"tip_mm", {17.25, 17.25, 17.25}}, {"volume_ml", 1.0}}, &points);
+  const nlohmann::json m = run(image, {{"tip_mm", {17.25, 17.25, 17.25}}, {"direction", {0, 0, 1}}, {"volume_ml", 1.0}}, &points);
   auto* volume = points->GetPointData()->GetArray("cement_volume_mm3");
   double below = 0, above = 0;
   for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i)
@@ -245,7 +245,7 @@ Cement cementOf(vtkPolyData* points) {
 TEST(ContinuumBone, AnObliqueCopyOfTheCTGivesTheSameCementInPatientCoordinates) {
   // The same body scanned straight and rotated 20 degrees about z (an oblique series): the cement's centroid
   // and mean distance from the tip agree within one voxel (0.5 mm), in the patient frame.
-  const nlohmann::json scene{{"tip_mm", {9, 10, 10}}, {"volume_ml", 0.8}, {"snapshot_interval_s", 1000.0}};
+  const nlohmann::json scene{{"tip_mm", {9, 10, 10}}, {"direction", {0, 0, 1}}, {"volume_ml", 0.8}, {"snapshot_interval_s", 1000.0}};
   const InjectionRunResult straight = runInjection(body(46, 0), sceneFromJson(scene), {});
   const InjectionRunResult oblique = runInjection(body(60, 20), sceneFromJson(scene), {});
   EXPECT_FALSE(straight.metrics["ct_resampled_to_axis_aligned"].get<bool>());

@@ -546,7 +546,7 @@ TEST(ObliqueCT, InjectCommandDrawsEveryPictureForATiltedContinuumCt) {
     tilted->SetPixel(i, !inBox ? -100.f : !inMarrow ? 1000.f : p[0] < kTip[0] ? 150.f : 250.f);
   });
   fs::path dir;
-  const auto r = injectCommand("oblique-inject-continuum", tilted, R"("volume_ml": 0.3, "snapshot_interval_s": 1000)", dir);
+  const auto r = injectCommand("oblique-inject-continuum", tilted, R"("volume_ml": 0.3, "snapshot_interval_s": 1000, "direction": [0, 0, 1])", dir);
   ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
   for (const char* f : {"tip_pressure.png", "injection_pressure.png", "cement_slices.png", "cement_surface.png"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;

@@ -79,6 +79,7 @@ double evaluate(unsigned, const double* x, double*, void* data) {
     scene::SceneConfig s = r.scene;
     s.tipMm = e.tipMm;
     s.direction = axis;
+    s.explicitKeys.insert("direction"); // the trajectory is given, whatever its value (a vertebra needs one)
     s.volumeMl = x[1];
     s.snapshotIntervalS = 1e9;
     if (e.secondTip) {

@@ -501,6 +501,17 @@ private:
       return;
     }
     anatomy::requireTipInVertebra(cube, hu.data(), tip, scene.allowTipOutsideBone);
+    // In a vertebra the cannula's direction decides which voxels its shaft closes and whether the shaft crosses
+    // disc, canal or a vessel: the default [0, 0, 1] (a shaft from straight below, through the endplate) would
+    // be silently wrong there. The synthetic phantoms (foam, no vertebra) keep the default by design.
+    if (!scene.directionGiven()) {
+      const std::string found = cube.rule == "labels" ? "by the label map" : "walled by cortex in the CT";
+      throw std::invalid_argument("scene: key 'direction' is missing: the tip is in a vertebra (found " + found +
+                                  "), where the default [0, 0, 1] (a shaft from straight below) would be silently "
+                                  "wrong; give the cannula's direction from the entry point toward the tip in the "
+                                  "CT's frame (LPS), e.g. \"direction\": [0, -1, 0] from behind, or --set "
+                                  "direction=[x,y,z]");
+    }
     // The region's classes from the cube (the same grid, offset by the region's start).
     anatomy::Anatomy roi;
     roi.rule = cube.rule;

@@ -6,6 +6,8 @@
 //   particle_radius_mm              r; spacing d = 2r, volume d^3 (VALIDATION.md)          paper 0.57
 //   tip_mm [x,y,z]                  cannula tip in the CT's physical frame                  required
 //   direction [x,y,z]               flow direction (normalised; not zero)                   [0,0,1]
+//                                   from the entry point toward the tip; required where the tip is in a
+//                                   vertebra (a patient CT: voxel-darcy's anatomy finds one, or labels_path)
 //   cannula_inner_diameter_mm       11G regular wall                                        paper 2.388
 //   cannula_length_mm               wall length behind the tip                              paper 90
 //   cannula_wall (bool)             fixed-particle cannula wall                             true
@@ -152,6 +154,10 @@ struct SceneConfig {
   std::set<std::string> explicitKeys;
   double curingFactor(double timeSinceInjectionStartS) const;
   bool hasSecondTip() const { return secondTipWithdrawalMm.has_value(); }
+  // Whether the cannula's direction was given rather than defaulted: the key was set (scene file or override), or
+  // code set a direction other than the default (a plan's trajectory). Code that means [0, 0, 1] on a patient CT
+  // records "direction" in explicitKeys.
+  bool directionGiven() const { return explicitKeys.count("direction") > 0 || direction != Eigen::Vector3d::UnitZ(); }
   Eigen::Vector3d secondTipMm() const { return *tipMm - *secondTipWithdrawalMm * direction.normalized(); }
   double secondTipStartS() const { return (volumeMl - secondTipVolumeMl) / flowRateMlPerS; }
   // The curing curve over time since mixing (throws std::invalid_argument as validate() for bad keys).
