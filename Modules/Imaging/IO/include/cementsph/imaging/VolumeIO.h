@@ -43,6 +43,9 @@ void writeMask(const MaskType* mask, const std::string& path);
 // Writes a DICOM series (one file per slice, int16, CT modality) into directory, which is created.
 // Stored values are HU - rescaleInterceptHU (scanners commonly store with intercept -1024); the
 // Rescale Intercept tag says so. Geometry goes into Image Position / Orientation Patient.
+// The slices go to a staging folder beside directory and move in only when all are written (an earlier
+// series' slices go first): a failure (no room, the file size limit, a failed write) is an OutputError of
+// one line and leaves no slice behind.
 void writeDicomSeries(const ImageType* image, const std::string& directory,
                       double rescaleInterceptHU = 0.0);
 
