@@ -66,6 +66,12 @@ Picture readPicture(const std::filesystem::path& png) {
   return p;
 }
 
+std::size_t differingPixels(const Picture& a, const Picture& b) {
+  std::size_t differing = 0;
+  for (std::size_t n = 0; n < std::min(a.pixels.size(), b.pixels.size()); ++n) differing += a.pixels[n] != b.pixels[n];
+  return differing;
+}
+
 struct Rect {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0; // [x0, x1) x [y0, y1)
   int width() const { return x1 - x0; }
@@ -220,18 +226,40 @@ constexpr int kNx = 40, kNy = 30, kNz = 24;
 constexpr double kSpacing[3] = {0.8, 0.8, 1.5};
 const Rgb kLevelGrey{128, 128, 128};
 
-vtkSmartPointer<vtkImageData> volume(int type, double value, bool mirroredX = false) {
+// How the test CT's voxels are stored, each the same physical grid: as given (LPS, identity direction); mirrored in
+// x (index x runs towards the patient's right, from x = 31.2 mm down to 0); permuted (index x runs to superior, y to
+// posterior, z to the patient's left: 24 x 30 x 40 voxels of 1.5 x 0.8 x 0.8 mm).
+enum class Stored { Lps, MirroredX, Permuted };
+
+vtkSmartPointer<vtkImageData> volume(int type, double value, Stored stored = Stored::Lps) {
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(kNx, kNy, kNz);
   image->SetSpacing(kSpacing[0], kSpacing[1], kSpacing[2]);
-  if (mirroredX) {
-    // Stored right to left: index x runs towards the patient's right (LPS -x); the same physical box.
+  if (stored == Stored::MirroredX) {
     image->SetOrigin((kNx - 1) * kSpacing[0], 0, 0);
     image->SetDirectionMatrix(-1, 0, 0, 0, 1, 0, 0, 0, 1);
+  } else if (stored == Stored::Permuted) {
+    image->SetDimensions(kNz, kNy, kNx);
+    image->SetSpacing(kSpacing[2], kSpacing[1], kSpacing[0]);
+    image->SetDirectionMatrix(0, 0, 1, 0, 1, 0, 1, 0, 0); // columns: index x -> +z, y -> +y, z -> +x
   }
   image->AllocateScalars(type, 1);
   image->GetPointData()->GetScalars()->Fill(value);
   return image;
+}
+
+// Sets the voxels whose centres lie in the box [lo, hi] (mm, patient frame) to value.
+void paintBox(vtkImageData* image, const std::array<double, 3>& lo, const std::array<double, 3>& hi, double value) {
+  int d[3];
+  image->GetDimensions(d);
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i) {
+        double p[3];
+        image->TransformIndexToPhysicalPoint(i, j, k, p);
+        if (p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1] && p[2] >= lo[2] && p[2] <= hi[2])
+          image->SetScalarComponentFromDouble(i, j, k, 0, value);
+      }
 }
 
 // The physical point (mm) of a continuous index in an identity-direction CT at the origin, and back.
@@ -248,27 +276,47 @@ std::array<double, 2> onPanel(const Rect& r, double right, int rightCount, doubl
 
 } // namespace
 
-TEST(LabelledCementSlices, PanelsAreNamedAndLetteredFromTheDirectionMatrix) {
+TEST(LabelledCementSlices, ConventionalViewsLetteredFromTheDirectionMatrixHoweverTheCTIsStored) {
   const auto dir = scratchFolder();
   CementSlicesOptions o;
-  // The picture of a uniform CT stored as given; its three panels' letters (left, right, top, bottom).
-  auto lettered = [&](bool mirroredX, const std::filesystem::path& png, const std::array<std::string, 3>& letters) {
-    writeCementSlices(volume(VTK_FLOAT, 300.0, mirroredX), volume(VTK_UNSIGNED_CHAR, 0, mirroredX), {16, 12, 18}, png, o);
-    const Picture picture = readPicture(png);
-    const auto found = findPanels(picture, kLevelGrey);
-    EXPECT_EQ(found.size(), 3u) << png;
-    for (std::size_t i = 0; i < std::min<std::size_t>(3, found.size()); ++i)
-      expectEdgeLetters(picture, found, i, letters[i], o.fontPx);
-    return std::make_pair(picture, found);
+  // One patient: 300 HU with a white marker (1050 HU and above is white in the bone window) at the patient's left,
+  // anterior and superior: x 22..28.4, y 2..7, z 23.5..31 mm. The slices cross inside it.
+  const std::array<double, 3> centre{25.0, 4.5, 27.0};
+  const Rgb white{255, 255, 255};
+  auto picture = [&](Stored stored, const std::filesystem::path& png) {
+    auto ct = volume(VTK_FLOAT, 300.0, stored);
+    paintBox(ct, {22, 2, 23.5}, {28.4, 7, 31}, 1050.0); // no voxel centre on a face: storage-independent
+    writeCementSlices(ct, volume(VTK_UNSIGNED_CHAR, 0, stored), centre, png, o);
+    return readPicture(png);
   };
-  // An LPS CT (identity direction): x runs to the patient's left, y to posterior, z to superior. Radiological
-  // view: the patient's right on the picture's left; anterior up on the axial panel, superior up on the others.
-  const auto [lps, panels] = lettered(false, dir / "lps.png", {"RLAP", "RLSI", "APSI"});
-  // The same CT stored mirrored in x: its index x runs to the patient's right, so L and R change sides on the
-  // axial and coronal panels; the sagittal panel (y, z) keeps its letters.
-  lettered(true, dir / "mirrored.png", {"LRAP", "LRSI", "APSI"});
+  const Picture lps = picture(Stored::Lps, dir / "lps.png");
+  const auto panels = findPanels(lps, kLevelGrey);
+  ASSERT_EQ(panels.size(), 3u);
+  // Radiological views of an LPS CT (x to the patient's left, y posterior, z superior): axial with the patient's
+  // right on the picture's left and anterior up; coronal right on the left, superior up; sagittal anterior on the
+  // left, superior up.
+  expectEdgeLetters(lps, panels, 0, "RLAP", o.fontPx);
+  expectEdgeLetters(lps, panels, 1, "RLSI", o.fontPx);
+  expectEdgeLetters(lps, panels, 2, "APSI", o.fontPx);
+  // The marker where those letters say: on the L and A side of the axial panel, L and S of the coronal, A and S
+  // of the sagittal (its white pixels' centroid right or left of and above the panel's middle).
+  const bool towardsRight[3] = {true, true, false};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Centroid c = centroidOf(lps, panels[i], white);
+    ASSERT_GT(c.count, 100) << "no marker on panel " << i;
+    EXPECT_EQ(c.x > 0.5 * (panels[i].x0 + panels[i].x1), towardsRight[i]) << "panel " << i;
+    EXPECT_LT(c.y, 0.5 * (panels[i].y0 + panels[i].y1)) << "panel " << i;
+  }
   // The plane names: text (ink) in the title row above each panel.
   for (const Rect& r : panels) EXPECT_GT(inkIn(lps, {r.x0 - 10, r.y0 - 2 * (o.fontPx + 6), r.x1, r.y0 - o.fontPx - 6}).width, 20);
+  // The same patient stored mirrored in x, or with its axes permuted (the same physical grid): the same picture,
+  // pixel for pixel, letters included.
+  for (const auto& [stored, name] : {std::make_pair(Stored::MirroredX, "mirrored.png"), std::make_pair(Stored::Permuted, "permuted.png")}) {
+    const Picture other = picture(stored, dir / name);
+    ASSERT_EQ(other.width, lps.width) << name;
+    ASSERT_EQ(other.height, lps.height) << name;
+    EXPECT_EQ(differingPixels(other, lps), 0u) << name << " differs from the LPS CT's picture";
+  }
 }
 
 TEST(LabelledCementSlices, ScaleBarIsTenMillimetresAtEachPanelsScale) {
@@ -339,6 +387,13 @@ TEST(LabelledCementSlices, TipRingAndShaftSitWhereTheyProject) {
     EXPECT_TRUE(contains(p, {bx - 2, by - 2, bx + 3, by + 3}, shaft)) << "no shaft 8 mm behind the tip, panel " << i;
     const int ax = int(2 * expected[i][0] - behind[i][0]), ay = int(2 * expected[i][1] - behind[i][1]);
     EXPECT_FALSE(contains(p, {ax - 2, ay - 2, ax + 3, ay + 3}, shaft)) << "shaft drawn ahead of the tip, panel " << i;
+  }
+  // The same cannula in the same patient stored mirrored or permuted: the same picture, pixel for pixel.
+  for (const auto& [stored, name] : {std::make_pair(Stored::MirroredX, "mirrored.png"), std::make_pair(Stored::Permuted, "permuted.png")}) {
+    writeCementSlices(volume(VTK_FLOAT, 300.0, stored), volume(VTK_UNSIGNED_CHAR, 0, stored), {16, 12, 18}, dir / name, o);
+    const Picture other = readPicture(dir / name);
+    ASSERT_EQ(other.pixels.size(), p.pixels.size()) << name;
+    EXPECT_EQ(differingPixels(other, p), 0u) << name << " differs from the LPS CT's picture";
   }
 }
 
@@ -449,7 +504,7 @@ TEST(LabelledSliceComparison, AxialPanelsCarryLettersAndScaleBar) {
     EXPECT_NEAR(measured, expected, 1.0);
   }
   // Mirrored in x: the letters swap.
-  auto mirrored = volume(VTK_FLOAT, 300.0, true);
+  auto mirrored = volume(VTK_FLOAT, 300.0, Stored::MirroredX); // slices.png keeps the stored order
   for (int k = 10; k < 14; ++k)
     for (int j = 10; j < 20; ++j)
       for (int i = 15; i < 25; ++i) mirrored->SetScalarComponentFromDouble(i, j, k, 0, 2000.0);

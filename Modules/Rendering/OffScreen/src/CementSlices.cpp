@@ -54,12 +54,30 @@ Rgb leakColour(const std::string& kind) {
   return kLeakUnknown;
 }
 
-// The panels: which voxel axis runs to the right (u), which down or up (v), which is fixed.
+// A panel: which voxel axis runs to the right (u) and which downwards (v), and which way; which one is fixed.
 struct Panel {
   int u, v, fixed;
-  bool vUp; // index v grows upwards (z: superior up); otherwise downwards (y: posterior down in an LPS CT)
+  int uSign, vSign; // +1: the index grows to the right (u) or downwards (v); -1: the other way
 };
-constexpr Panel kPanels[3] = {{0, 1, 2, false}, {0, 2, 1, true}, {1, 2, 0, true}};
+
+// The conventional views whatever order the CT's voxels are stored in: axial with the patient's right on the
+// left and anterior up (radiological convention), coronal with the right on the left and superior up, sagittal
+// with anterior on the left and superior up. Each patient axis is the voxel axis whose direction is mostly along
+// it; where two voxel axes are mostly along the same patient axis (an oblique CT near 45 degrees) the panels keep
+// the stored order: index x right, y down (axial), z up (coronal, sagittal); the letters still say where they run.
+std::array<Panel, 3> conventionalPanels(const double direction[9]) {
+  int along[3] = {-1, -1, -1}; // the voxel axis along patient x, y, z
+  for (int a = 0; a < 3; ++a) {
+    const int r = detail::patientAxis(direction, a);
+    if (along[r] >= 0) return {Panel{0, 1, 2, +1, +1}, Panel{0, 2, 1, +1, -1}, Panel{1, 2, 0, +1, -1}};
+    along[r] = a;
+  }
+  auto sign = [&](int r) { return direction[r * 3 + along[r]] > 0 ? +1 : -1; };
+  // Right: +x (left, L) on the axial and coronal panels, +y (posterior) on the sagittal one. Down: +y (posterior)
+  // on the axial panel, -z (inferior) on the others.
+  return {Panel{along[0], along[1], along[2], sign(0), sign(1)}, Panel{along[0], along[2], along[1], sign(0), -sign(2)},
+          Panel{along[1], along[2], along[0], sign(1), -sign(2)}};
+}
 
 void requireSameGrid(vtkImageData* image, const int dims[3], const char* what) {
   if (!image) return;
@@ -156,10 +174,11 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
     return kind;
   };
 
+  const std::array<Panel, 3> panels = conventionalPanels(direction);
   // Panel sizes: square pixels in mm, each voxel an integer number of pixels wide.
   int scale[3], widths[3], heights[3];
   for (int p = 0; p < 3; ++p) {
-    const Panel& q = kPanels[p];
+    const Panel& q = panels[std::size_t(p)];
     const double mmPerPixel = std::max(dims[q.u] * spacing[q.u], 1e-9) / o.pixelsPerPanel;
     scale[p] = std::max(1, int(std::lround(spacing[q.u] / mmPerPixel)));
     widths[p] = dims[q.u] * scale[p];
@@ -167,19 +186,19 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   }
   // The voxel a panel pixel shows.
   auto voxelAt = [&](int p, int x, int y, int ijk[3]) {
-    const Panel& q = kPanels[p];
+    const Panel& q = panels[std::size_t(p)];
     ijk[q.fixed] = centre[q.fixed];
-    ijk[q.u] = std::min(dims[q.u] - 1, x / scale[p]);
+    const int right = std::min(dims[q.u] - 1, x / scale[p]);
+    ijk[q.u] = q.uSign > 0 ? right : dims[q.u] - 1 - right;
     const int down = std::min(dims[q.v] - 1, int(double(y) * dims[q.v] / heights[p]));
-    ijk[q.v] = q.vUp ? dims[q.v] - 1 - down : down;
+    ijk[q.v] = q.vSign > 0 ? down : dims[q.v] - 1 - down;
   };
 
   // What the legend needs: the labels and leak kinds on the three slices.
   std::set<int> labelsShown;
   std::set<std::string> kindsShown;
   bool vertebraShown = false;
-  for (int p = 0; p < 3; ++p) {
-    const Panel& q = kPanels[p];
+  for (const Panel& q : panels) {
     int ijk[3];
     ijk[q.fixed] = centre[q.fixed];
     for (ijk[q.v] = 0; ijk[q.v] < dims[q.v]; ++ijk[q.v])
@@ -238,7 +257,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   PixelCanvas canvas(total, panelY + tallest + margins.bottom + legendHeight + border, kWhite);
 
   for (int p = 0; p < 3; ++p) {
-    const Panel& q = kPanels[p];
+    const Panel& q = panels[std::size_t(p)];
     const int w = widths[p], h = heights[p];
     std::vector<char> vertebra(o.vertebraMask ? std::size_t(w) * std::size_t(h) : 0);
     for (int y = 0; y < h; ++y)
@@ -282,8 +301,9 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
         }
     // The cannula, projected onto the panel's plane.
     auto toPixel = [&](const std::array<double, 3>& c) {
-      const double down = (c[std::size_t(q.v)] + 0.5) * h / dims[q.v];
-      return std::array<double, 2>{panelX[p] + (c[std::size_t(q.u)] + 0.5) * scale[p], panelY + (q.vUp ? h - down : down)};
+      const double cu = c[std::size_t(q.u)], cv = c[std::size_t(q.v)];
+      const double right = q.uSign > 0 ? cu : dims[q.u] - 1 - cu, down = q.vSign > 0 ? cv : dims[q.v] - 1 - cv;
+      return std::array<double, 2>{panelX[p] + (right + 0.5) * scale[p], panelY + (down + 0.5) * h / dims[q.v]};
     };
     const std::array<int, 4> clip{panelX[p], panelX[p] + w, panelY, panelY + h};
     if (tipIndex && shaftEndIndex) {
@@ -303,10 +323,10 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
       title << detail::planeName(direction, q.fixed) << "  " << "xyz"[along] << " = " << std::fixed
             << std::setprecision(1) << centrePoint[along] << " mm";
       a.title = title.str();
-      a.left = detail::patientLetter(direction, q.u, -1);
-      a.right = detail::patientLetter(direction, q.u, +1);
-      a.top = detail::patientLetter(direction, q.v, q.vUp ? +1 : -1);
-      a.bottom = detail::patientLetter(direction, q.v, q.vUp ? -1 : +1);
+      a.left = detail::patientLetter(direction, q.u, -q.uSign);
+      a.right = detail::patientLetter(direction, q.u, q.uSign);
+      a.top = detail::patientLetter(direction, q.v, -q.vSign);
+      a.bottom = detail::patientLetter(direction, q.v, q.vSign);
       a.mmPerPixel = spacing[q.u] / scale[p];
       a.scaleBarMm = o.scaleBarMm;
       detail::annotatePanel(canvas, panelX[p], panelY, w, h, a, o.fontPx);

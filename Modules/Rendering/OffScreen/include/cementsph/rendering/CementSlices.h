@@ -4,9 +4,8 @@
 // image, blended in: no OpenGL, so nothing can come back black) and written as PNG.
 //
 // What a planning engineer reads on it (annotate, the default):
-// - each panel's plane name, named from the CT's direction matrix (the plane normal to the patient's S axis is
-//   axial, to A-P coronal, to L-R sagittal), and the patient direction each edge faces (LPS: L/R, A/P, S/I), also
-//   from the direction matrix: a CT stored mirrored gets its letters on the other side;
+// - each panel's plane name and position, and the patient direction each edge faces (LPS: L/R, A/P, S/I), both
+//   from the CT's direction matrix;
 // - a scale bar (scaleBarMm, halved until it fits the panel's width) below each panel, its length in pixels
 //   scaleBarMm / (voxel spacing / pixels per voxel) along the panel's horizontal axis;
 // - the cannula tip as a ring and its shaft (from the tip back along the direction) as a line, both projected
@@ -15,9 +14,12 @@
 // - the vertebra's outline (vertebraMask);
 // - a legend of the colours the picture uses.
 //
-// Panel axes: the axial panel shows voxel x to the right and y downwards (a CT stored in LPS order: the patient's
-// right on the picture's left, anterior up, as radiologists view it); the coronal panel x to the right, z upwards;
-// the sagittal panel y to the right, z upwards. The letters follow whatever the direction matrix says these run to.
+// Panel axes: the conventional views whatever order the voxels are stored in (flipped or permuted axes, as
+// inject's files on the input grid may be): axial with the patient's right on the picture's left and anterior up
+// (as radiologists view it), coronal with the right on the left and superior up, sagittal with anterior on the left
+// and superior up. Each patient axis is the voxel axis mostly along it (nearest voxel, no resampling); an oblique CT
+// whose voxel axes are near 45 degrees keeps the stored order (voxel x right, y down or z up) and its letters name
+// the patient direction each edge mostly faces.
 //
 // Colours (RGB): cement in bone half (40, 110, 255) over the CT grey; target without cement half (255, 220, 0);
 // leaked, opaque, by kind: disc (220, 0, 220), canal (255, 140, 0), venous (140, 70, 255), other_bone
