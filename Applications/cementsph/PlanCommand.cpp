@@ -3,7 +3,8 @@
 // every evaluation, the optimiser's stop reason), DIR/plan.csv, DIR/convergence.png and DIR/best/ (the best
 // plan's injection, with cement_slices.png through the target: cement blue, leaks red, the uncovered target
 // yellow).
-#include "cementsph/provenance/Provenance.h"
+// A thin layer: the planner, plan.json/plan.csv and the best plan's run are CementSPH::Planning's
+// (InjectionPlanner.h, PlanOutputs.h); this file parses the options, draws the pictures and prints the summary.
 #include "CommandRegistry.h"
 #include "OutputFiles.h"
 
@@ -11,11 +12,11 @@
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/planning/InjectionPlanner.h"
+#include "cementsph/planning/PlanOutputs.h"
 #include "cementsph/rendering/CementSlices.h"
 #include "cementsph/rendering/XYPlot.h"
 #include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneConfig.h"
-#include "cementsph/sph/Simulation.h"
 
 #include <omp.h>
 
@@ -39,6 +40,108 @@ struct PlanArgs {
 };
 
 Eigen::Vector3d vec(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
+
+using namespace cementsph;
+
+planning::PlanRequest planRequest(const PlanArgs& a) {
+  planning::PlanRequest r;
+  // The scene's tip and volume are the plan's to choose: the entry stands in for the tip while reading it.
+  r.scene = scene::loadSceneFile(a.scene, {"tip_mm=[" + std::to_string(a.entry[0]) + "," + std::to_string(a.entry[1]) +
+                                               "," + std::to_string(a.entry[2]) + "]"});
+  r.entryMm = vec(a.entry);
+  r.direction = vec(a.direction);
+  r.minDepthMm = a.minDepthMm;
+  r.maxDepthMm = a.maxDepthMm;
+  r.targetCentreMm = vec(a.target);
+  r.targetRadiusMm = a.targetRadiusMm;
+  r.minVolumeMl = a.minVolumeMl;
+  r.maxVolumeMl = a.maxVolumeMl;
+  r.maxSyringeMpa = a.maxSyringeMpa;
+  r.maxLeakageMl = a.maxLeakageMl;
+  r.volumeCostPerMl = a.volumeCostPerMl;
+  r.maxEvaluations = a.maxEvaluations;
+  r.starts = a.starts;
+  r.secondTip = a.secondTip;
+  return r;
+}
+
+// convergence.png: every evaluation's objective and the best so far.
+void drawConvergence(const planning::PlanResult& plan, const fs::path& png) {
+  rendering::PlotSpec spec;
+  spec.title = "Plan: objective per evaluation";
+  spec.xLabel = "evaluation";
+  spec.yLabel = "coverage - penalties";
+  rendering::PlotSeries each, best;
+  each.name = "evaluation";
+  each.style = rendering::PlotSeries::Style::Points;
+  best.name = "best so far";
+  best.style = rendering::PlotSeries::Style::Line;
+  best.rgb = {214, 39, 40};
+  double sofar = -1e300;
+  for (const auto& e : plan.evaluations) {
+    each.x.push_back(e.index);
+    each.y.push_back(e.objective);
+    sofar = std::max(sofar, e.objective);
+    best.x.push_back(e.index);
+    best.y.push_back(sofar);
+  }
+  spec.series = {each, best};
+  rendering::writePlotPng(spec, png);
+}
+
+void printEvaluation(const planning::PlanEvaluation& e) {
+  std::cerr << "plan " << e.index << " (start " << e.start << "): depth " << e.depthMm << " mm, " << e.volumeMl
+            << " ml: coverage " << e.coverage << ", syringe " << e.syringeMpa << " MPa, leak " << e.leakageMl << " ml"
+            << (e.failure.empty() ? "" : " (" + e.failure + ")") << "\n";
+}
+
+void printSummary(const planning::PlanResult& plan, const std::string& out) {
+  const auto& b = plan.best;
+  std::cout << "plan: depth " << b.depthMm << " mm (tip " << b.tipMm.x() << "," << b.tipMm.y() << "," << b.tipMm.z()
+            << " mm), " << b.volumeMl << " ml"
+            << (b.secondTip ? " (" + std::to_string(b.secondVolumeMl) + " ml of it at a second tip, depth " +
+                                  std::to_string(b.secondDepthMm) + " mm)"
+                            : std::string())
+            << ": coverage " << b.coverage << ", syringe " << b.syringeMpa << " MPa, leak " << b.leakageMl << " ml, "
+            << (b.withinLimits ? "within" : "OUTSIDE") << " the limits; " << plan.evaluations.size()
+            << " injections in " << plan.starts.size() << " starts"
+            << (plan.mpiRanks > 1 ? " over " + std::to_string(plan.mpiRanks) + " MPI ranks" : std::string()) << ", "
+            << plan.stopReason << "; results in " << out << "\n";
+}
+
+int runPlan(const PlanArgs& a) {
+  // Under mpirun the starts are shared among the ranks (Modules/Parallel/CaseFarm); rank 0 writes.
+  parallel::CaseFarm& farm = parallel::caseFarm();
+  if (a.threads > 0) omp_set_num_threads(a.threads);
+  else if (farm.ranks() > 1 && !std::getenv("OMP_NUM_THREADS"))
+    omp_set_num_threads(farm.threadsPerRank(omp_get_num_procs()));
+  planning::PlanRequest r;
+  imaging::ImageType::Pointer image;
+  farm.agree([&] {
+    r = planRequest(a);
+    image = imaging::readVolume(a.ct);
+    r.validate(image); // before anything is written
+  });
+  const planning::PlanResult plan = planning::planInjection(
+      image, r, [&](const planning::PlanEvaluation& e) { if (!a.quiet) printEvaluation(e); }, &farm);
+  if (!farm.coordinator()) return 0; // a worker: its starts went to rank 0
+  planning::requireAnInjectionThatRan(plan);
+  const fs::path out(a.out);
+  planning::writePlanTables(plan, r, out);
+  app::PictureSteps pictures("plan");
+  pictures.draw("convergence.png", out / "convergence.png", [&](const fs::path& png) { drawConvergence(plan, png); });
+  // The best plan's injection, its files and its picture with the target (the cement missed yellow).
+  if (plan.best.failure.empty()) {
+    const scene::InjectionRunResult run = planning::runBestPlan(image, plan, r, out / "best");
+    pictures.draw("best/cement_slices.png", out / "best" / "cement_slices.png", [&](const fs::path& png) {
+      const auto labels = planning::labelsWithUncoveredTarget(run, r.targetCentreMm, r.targetRadiusMm);
+      rendering::writeCementSlices(imaging::toVtk(run.simulatedCt.GetPointer()), labels,
+                                   {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()}, png);
+    });
+  }
+  printSummary(plan, a.out);
+  return pictures.status();
+}
 
 cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
   auto a = std::make_shared<PlanArgs>();
@@ -67,135 +170,7 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
                "Also plan a second, shallower tip on the trajectory: the cannula withdrawn part-way through the "
                "volume (the two-depth technique)");
   sub.add_flag("--quiet", a->quiet, "No line per evaluation");
-  return [a]() {
-    using namespace cementsph;
-    // Under mpirun the starts are shared among the ranks (Modules/Parallel/CaseFarm); rank 0 writes.
-    parallel::CaseFarm& farm = parallel::caseFarm();
-    if (a->threads > 0) omp_set_num_threads(a->threads);
-    else if (farm.ranks() > 1 && !std::getenv("OMP_NUM_THREADS"))
-      omp_set_num_threads(farm.threadsPerRank(omp_get_num_procs()));
-    planning::PlanRequest r;
-    imaging::ImageType::Pointer image;
-    farm.agree([&] {
-      // The scene's tip and volume are the plan's to choose: the entry stands in for the tip while reading it.
-      r.scene = scene::loadSceneFile(a->scene, {"tip_mm=[" + std::to_string(a->entry[0]) + "," +
-                                                    std::to_string(a->entry[1]) + "," + std::to_string(a->entry[2]) + "]"});
-      r.entryMm = vec(a->entry);
-      r.direction = vec(a->direction);
-      r.minDepthMm = a->minDepthMm;
-      r.maxDepthMm = a->maxDepthMm;
-      r.targetCentreMm = vec(a->target);
-      r.targetRadiusMm = a->targetRadiusMm;
-      r.minVolumeMl = a->minVolumeMl;
-      r.maxVolumeMl = a->maxVolumeMl;
-      r.maxSyringeMpa = a->maxSyringeMpa;
-      r.maxLeakageMl = a->maxLeakageMl;
-      r.volumeCostPerMl = a->volumeCostPerMl;
-      r.maxEvaluations = a->maxEvaluations;
-      r.starts = a->starts;
-      r.secondTip = a->secondTip;
-      image = imaging::readVolume(a->ct);
-      r.validate(image); // before anything is written
-    });
-    const planning::PlanResult plan = planning::planInjection(
-        image, r,
-        [&](const planning::PlanEvaluation& e) {
-          if (a->quiet) return;
-          std::cerr << "plan " << e.index << " (start " << e.start << "): depth " << e.depthMm << " mm, " << e.volumeMl
-                    << " ml: coverage " << e.coverage << ", syringe " << e.syringeMpa << " MPa, leak " << e.leakageMl
-                    << " ml" << (e.failure.empty() ? "" : " (" + e.failure + ")") << "\n";
-        },
-        &farm);
-    if (!farm.coordinator()) return 0; // a worker: its starts went to rank 0
-    // A plan none of whose injections ran is no plan: a failed run, nothing written.
-    if (std::all_of(plan.evaluations.begin(), plan.evaluations.end(),
-                    [](const planning::PlanEvaluation& e) { return !e.failure.empty(); }))
-      throw sph::SimulationError("every one of the " + std::to_string(plan.evaluations.size()) +
-                                 " injections failed (the first: " +
-                                 (plan.evaluations.empty() ? std::string("none ran") : plan.evaluations.front().failure) +
-                                 "); no plan written: check the trajectory and the scene");
-    const fs::path out(a->out);
-    fs::create_directories(out);
-    nlohmann::json planJson = plan.toJson(r);
-    planJson["provenance"] = cementsph::provenance::toJson();
-    app::writeFileAtomically(out / "plan.json", planJson.dump(2) + "\n");
-    app::writeFileAtomically(out / "plan.csv", plan.csv());
-    int status = 0;
-    try {
-      rendering::PlotSpec spec;
-      spec.title = "Plan: objective per evaluation";
-      spec.xLabel = "evaluation";
-      spec.yLabel = "coverage - penalties";
-      rendering::PlotSeries each, best;
-      each.name = "evaluation";
-      each.style = rendering::PlotSeries::Style::Points;
-      best.name = "best so far";
-      best.style = rendering::PlotSeries::Style::Line;
-      best.rgb = {214, 39, 40};
-      double sofar = -1e300;
-      for (const auto& e : plan.evaluations) {
-        each.x.push_back(e.index);
-        each.y.push_back(e.objective);
-        sofar = std::max(sofar, e.objective);
-        best.x.push_back(e.index);
-        best.y.push_back(sofar);
-      }
-      spec.series = {each, best};
-      rendering::writePlotPng(spec, out / "convergence.png");
-    } catch (const std::exception& e) {
-      std::cerr << "cementsph plan: picture convergence.png not written (the numbers are): " << e.what() << "\n";
-      status = 3;
-    }
-    // The best plan's injection, its files and its picture with the target.
-    if (plan.best.failure.empty()) {
-      scene::SceneConfig s = r.scene;
-      s.tipMm = plan.best.tipMm;
-      s.direction = r.direction.normalized();
-      s.volumeMl = plan.best.volumeMl;
-      if (plan.best.secondTip) {
-        s.secondTipWithdrawalMm = plan.best.depthMm - plan.best.secondDepthMm;
-        s.secondTipVolumeMl = plan.best.secondVolumeMl;
-      }
-      scene::InjectionRunOptions o;
-      o.outDir = (out / "best").string();
-      const scene::InjectionRunResult run = scene::runInjection(image, s, o);
-      try {
-        if (!run.cementLabels) throw std::runtime_error("the injection made no cement label map");
-        auto target = imaging::toVtk(run.cementLabels.GetPointer()); // the region's grid, as run.simulatedCt
-        // The target's voxels without cement as label 3 (yellow).
-        int dims[3];
-        target->GetDimensions(dims);
-        for (int k = 0; k < dims[2]; ++k)
-          for (int j = 0; j < dims[1]; ++j)
-            for (int i = 0; i < dims[0]; ++i) {
-              double p[3];
-              const int ijk[3] = {i, j, k};
-              target->TransformContinuousIndexToPhysicalPoint(ijk[0], ijk[1], ijk[2], p);
-              if ((Eigen::Vector3d(p[0], p[1], p[2]) - r.targetCentreMm).norm() <= r.targetRadiusMm &&
-                  target->GetScalarComponentAsDouble(i, j, k, 0) == 0)
-                target->SetScalarComponentFromDouble(i, j, k, 0, 3);
-            }
-        rendering::writeCementSlices(imaging::toVtk(run.simulatedCt.GetPointer()), target,
-                                     {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()},
-                                     out / "best" / "cement_slices.png");
-      } catch (const std::exception& e) {
-        std::cerr << "cementsph plan: picture best/cement_slices.png not written (the numbers are): " << e.what() << "\n";
-        status = 3;
-      }
-    }
-    const auto& b = plan.best;
-    std::cout << "plan: depth " << b.depthMm << " mm (tip " << b.tipMm.x() << "," << b.tipMm.y() << "," << b.tipMm.z()
-              << " mm), " << b.volumeMl << " ml"
-              << (b.secondTip ? " (" + std::to_string(b.secondVolumeMl) + " ml of it at a second tip, depth " +
-                                    std::to_string(b.secondDepthMm) + " mm)"
-                              : std::string())
-              << ": coverage " << b.coverage << ", syringe " << b.syringeMpa
-              << " MPa, leak " << b.leakageMl << " ml, " << (b.withinLimits ? "within" : "OUTSIDE") << " the limits; "
-              << plan.evaluations.size() << " injections in " << plan.starts.size() << " starts"
-              << (plan.mpiRanks > 1 ? " over " + std::to_string(plan.mpiRanks) + " MPI ranks" : std::string()) << ", "
-              << plan.stopReason << "; results in " << a->out << "\n";
-    return status;
-  };
+  return [a]() { return runPlan(*a); };
 }
 
 } // namespace
