@@ -9,6 +9,7 @@
 // A failed picture is one line on stderr and exit status 3 (the numbers are written), as in `compare`.
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
+#include "OutputFiles.h"
 #include "SceneOverrides.h"
 
 #include "cementsph/rendering/CementSlices.h"
@@ -33,6 +34,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 namespace {
@@ -70,108 +72,119 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
 
 namespace cementsph::app {
 
-int runInject(const InjectRequest& a) {
-  cementsph::scene::SceneConfig scene = cementsph::scene::loadSceneFile(a.scene, a.overrides);
-  if (!a.labels.empty()) scene.labelsPath = a.labels;
-  if (a.threads > 0) omp_set_num_threads(a.threads);
-  // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files.
-  const auto image = cementsph::imaging::readVolume(a.ct);
-  const auto spacing = image->GetSpacing();
-  const std::string note = cementsph::scene::checkRunSize(
-      cementsph::scene::estimateRun(scene, spacing[0] * spacing[1] * spacing[2]), a.allowLarge);
-  if (!note.empty() && !a.quiet) std::cerr << "cementsph inject: " << note << "\n";
-  const auto ct = cementsph::imaging::toVtk(image);
-  auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
-  filter->SetInputDataObject(0, ct);
-  filter->SetScene(scene);
-  filter->SetOutputDirectory(a.out);
-  filter->SetPrintProgress(!a.quiet);
-  filter->Update();
-  filter->RethrowIfFailed();
-  const nlohmann::json m = nlohmann::json::parse(filter->GetMetricsJSON());
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// The largest leakage site of the run's metrics (leakage_sites: volume_ml, position_mm), if any leaked.
+std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
+  std::optional<std::array<double, 3>> at;
+  double largest = 0;
+  if (!m.contains("leakage_sites")) return at;
+  for (const auto& site : m["leakage_sites"])
+    if (site["volume_ml"].get<double>() > largest) {
+      largest = site["volume_ml"].get<double>();
+      at = std::array<double, 3>{};
+      for (int axis = 0; axis < 3; ++axis) (*at)[std::size_t(axis)] = site["position_mm"][axis].get<double>();
+    }
+  return at;
+}
+
+// cement_slices.png: through the largest leak if there is one (drawn red), else through the tip.
+void drawCementSlices(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
+  const std::array<double, 3> centre =
+      largestLeakMm(m).value_or(std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()});
+  const auto sim = imaging::readVolume((out / "simulated_ct.nrrd").string());
+  const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
+  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), centre, png);
+}
+
+// cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the
+// largest leak (from the tip towards it, a little from above), so the cement in bone does not hide it.
+void drawCementSurface(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
+  const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
+  rendering::CementSurfaceOptions options;
+  if (const auto leak = largestLeakMm(m)) {
+    double d[3], norm = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      d[axis] = (*leak)[std::size_t(axis)] - (*scene.tipMm)[axis];
+      norm += d[axis] * d[axis];
+    }
+    norm = std::sqrt(norm);
+    if (norm > 1e-6)
+      for (int axis = 0; axis < 3; ++axis) options.viewDirection[axis] = d[axis] / norm + (axis == 2 ? 0.35 : 0.0);
+  }
+  if (m.contains("leakage_volume_ml") && m["leakage_volume_ml"].get<double>() > 0) {
+    std::ostringstream leakNote;
+    leakNote << std::setprecision(3) << "leaked " << m["leakage_volume_ml"].get<double>() << " ml at "
+             << m["leakage_sites"].size() << (m["leakage_sites"].size() == 1 ? " site" : " sites");
+    options.note = leakNote.str();
+  }
+  rendering::writeCementSurface(imaging::toVtk(labels.GetPointer()), png, options);
+}
+
+void printSummary(const json& m, const std::string& out) {
   std::cout << "injected " << m["volume_injected_ml"].get<double>() << " ml in " << m["steps"] << " steps, "
             << m["wall_time_s"].get<double>() << " s wall (real-time factor " << m["real_time_factor"].get<double>()
             << "); model " << m["pressure_model"].get<std::string>() << ", " << m["cement_points"]
             << (m.contains("fluid_particles") ? " particles" : " voxels holding cement")
             << (m.contains("escaped_particles") ? ", " + m["escaped_particles"].dump() + " left the region" : std::string())
-            << "; results in " << a.out << "\n";
+            << "; results in " << out << "\n";
+}
+
+// The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files; returns
+// its metrics.
+json runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
+  const auto image = imaging::readVolume(a.ct);
+  const auto spacing = image->GetSpacing();
+  const std::string note =
+      scene::checkRunSize(scene::estimateRun(scene, spacing[0] * spacing[1] * spacing[2]), a.allowLarge);
+  if (!note.empty() && !a.quiet) std::cerr << "cementsph inject: " << note << "\n";
+  auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
+  filter->SetInputDataObject(0, imaging::toVtk(image));
+  filter->SetScene(scene);
+  filter->SetOutputDirectory(a.out);
+  filter->SetPrintProgress(!a.quiet);
+  filter->Update();
+  filter->RethrowIfFailed();
+  return json::parse(filter->GetMetricsJSON());
+}
+
+} // namespace
+
+int runInject(const InjectRequest& a) {
+  scene::SceneConfig scene = scene::loadSceneFile(a.scene, a.overrides);
+  if (!a.labels.empty()) scene.labelsPath = a.labels;
+  if (a.threads > 0) omp_set_num_threads(a.threads);
+  const json m = runFilter(a, scene);
+  printSummary(m, a.out);
   if (a.noPictures) return 0;
-  int status = 0;
-  auto picture = [&](const std::string& name, const std::function<void()>& draw) {
-    try {
-      draw();
-    } catch (const std::exception& e) {
-      std::cerr << "cementsph inject: picture " << name << " not written (the numbers are): " << e.what() << "\n";
-      status = 3;
-    }
+  const fs::path out(a.out);
+  PictureSteps pictures("inject");
+  auto announce = [](const fs::path& png) { std::cout << "wrote " << png.string() << "\n"; };
+  auto step = [&](const std::string& name, const std::function<void(const fs::path&)>& draw) {
+    pictures.draw(name, out / name, [&](const fs::path& png) {
+      draw(png);
+      announce(png);
+    });
   };
-  const std::filesystem::path out(a.out);
-  picture("tip_pressure.png", [&] {
-    cementsph::rendering::writeTipPressurePlot(out / "tip_pressure.csv", out / "tip_pressure.png");
-    std::cout << "wrote " << (out / "tip_pressure.png").string() << "\n";
-  });
-  if (std::filesystem::exists(out / "cement_labels.nrrd"))
-    picture("cement_slices.png", [&] {
-      // Through the largest leak if there is one (drawn red), else through the tip.
-      std::array<double, 3> centre{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
-      double largest = 0;
-      if (m.contains("leakage_sites"))
-        for (const auto& site : m["leakage_sites"])
-          if (site["volume_ml"].get<double>() > largest) {
-            largest = site["volume_ml"].get<double>();
-            for (int axis = 0; axis < 3; ++axis) centre[std::size_t(axis)] = site["position_mm"][axis].get<double>();
-          }
-      const auto sim = cementsph::imaging::readVolume((out / "simulated_ct.nrrd").string());
-      const auto labels = cementsph::imaging::readVolume((out / "cement_labels.nrrd").string());
-      cementsph::rendering::writeCementSlices(cementsph::imaging::toVtk(sim.GetPointer()),
-                                              cementsph::imaging::toVtk(labels.GetPointer()), centre,
-                                              out / "cement_slices.png");
-      std::cout << "wrote " << (out / "cement_slices.png").string() << "\n";
-    });
-  if (std::filesystem::exists(out / "cement_labels.nrrd"))
-    picture("cement_surface.png", [&] {
-      // The cement's surface: in bone blue, leaked red (CementSurface.h).
-      const auto labels = cementsph::imaging::readVolume((out / "cement_labels.nrrd").string());
-      cementsph::rendering::CementSurfaceOptions options;
-      // Seen from the side of the largest leak (from the tip towards it, a little from above), so the
-      // cement in bone does not hide it.
-      double largest = 0;
-      if (m.contains("leakage_sites"))
-        for (const auto& site : m["leakage_sites"])
-          if (site["volume_ml"].get<double>() > largest) {
-            largest = site["volume_ml"].get<double>();
-            double d[3], norm = 0;
-            for (int axis = 0; axis < 3; ++axis) {
-              d[axis] = site["position_mm"][axis].get<double>() - (*scene.tipMm)[axis];
-              norm += d[axis] * d[axis];
-            }
-            norm = std::sqrt(norm);
-            if (norm > 1e-6)
-              for (int axis = 0; axis < 3; ++axis) options.viewDirection[axis] = d[axis] / norm + (axis == 2 ? 0.35 : 0.0);
-          }
-      if (m.contains("leakage_volume_ml") && m["leakage_volume_ml"].get<double>() > 0) {
-        std::ostringstream leakNote;
-        leakNote << std::setprecision(3) << "leaked " << m["leakage_volume_ml"].get<double>() << " ml at " << m["leakage_sites"].size()
-             << (m["leakage_sites"].size() == 1 ? " site" : " sites");
-        options.note = leakNote.str();
-      }
-      cementsph::rendering::writeCementSurface(cementsph::imaging::toVtk(labels.GetPointer()),
-                                               out / "cement_surface.png", options);
-      std::cout << "wrote " << (out / "cement_surface.png").string() << "\n";
-    });
-  picture("injection_pressure.png", [&] {
-    cementsph::rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", out / "injection_pressure.png");
-    std::cout << "wrote " << (out / "injection_pressure.png").string() << "\n";
-  });
+  step("tip_pressure.png", [&](const fs::path& png) { rendering::writeTipPressurePlot(out / "tip_pressure.csv", png); });
+  if (fs::exists(out / "cement_labels.nrrd")) {
+    step("cement_slices.png", [&](const fs::path& png) { drawCementSlices(out, scene, m, png); });
+    step("cement_surface.png", [&](const fs::path& png) { drawCementSurface(out, scene, m, png); });
+  }
+  step("injection_pressure.png",
+       [&](const fs::path& png) { rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", png); });
   if (scene.simulatedCtSnapshots)
-    picture("xray/", [&] {
+    pictures.draw("xray/", out / "xray", [&](const fs::path&) {
       XrayRequest xray;
       xray.sequence = {a.out};
       xray.out = (out / "xray").string();
       xray.drr.threads = a.threads;
       if (runXray(xray) != 0) throw std::runtime_error("see the lines above");
     });
-  return status;
+  return pictures.status();
 }
 
 } // namespace cementsph::app
