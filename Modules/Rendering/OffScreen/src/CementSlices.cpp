@@ -54,31 +54,6 @@ Rgb leakColour(const std::string& kind) {
   return kLeakUnknown;
 }
 
-// A panel: which voxel axis runs to the right (u) and which downwards (v), and which way; which one is fixed.
-struct Panel {
-  int u, v, fixed;
-  int uSign, vSign; // +1: the index grows to the right (u) or downwards (v); -1: the other way
-};
-
-// The conventional views whatever order the CT's voxels are stored in: axial with the patient's right on the
-// left and anterior up (radiological convention), coronal with the right on the left and superior up, sagittal
-// with anterior on the left and superior up. Each patient axis is the voxel axis whose direction is mostly along
-// it; where two voxel axes are mostly along the same patient axis (an oblique CT near 45 degrees) the panels keep
-// the stored order: index x right, y down (axial), z up (coronal, sagittal); the letters still say where they run.
-std::array<Panel, 3> conventionalPanels(const double direction[9]) {
-  int along[3] = {-1, -1, -1}; // the voxel axis along patient x, y, z
-  for (int a = 0; a < 3; ++a) {
-    const int r = detail::patientAxis(direction, a);
-    if (along[r] >= 0) return {Panel{0, 1, 2, +1, +1}, Panel{0, 2, 1, +1, -1}, Panel{1, 2, 0, +1, -1}};
-    along[r] = a;
-  }
-  auto sign = [&](int r) { return direction[r * 3 + along[r]] > 0 ? +1 : -1; };
-  // Right: +x (left, L) on the axial and coronal panels, +y (posterior) on the sagittal one. Down: +y (posterior)
-  // on the axial panel, -z (inferior) on the others.
-  return {Panel{along[0], along[1], along[2], sign(0), sign(1)}, Panel{along[0], along[2], along[1], sign(0), -sign(2)},
-          Panel{along[1], along[2], along[0], sign(1), -sign(2)}};
-}
-
 void requireSameGrid(vtkImageData* image, const int dims[3], const char* what) {
   if (!image) return;
   int d[3];
@@ -174,11 +149,11 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
     return kind;
   };
 
-  const std::array<Panel, 3> panels = conventionalPanels(direction);
+  const std::array<detail::PanelAxes, 3> panels = detail::conventionalViews(direction);
   // Panel sizes: square pixels in mm, each voxel an integer number of pixels wide.
   int scale[3], widths[3], heights[3];
   for (int p = 0; p < 3; ++p) {
-    const Panel& q = panels[std::size_t(p)];
+    const detail::PanelAxes& q = panels[std::size_t(p)];
     const double mmPerPixel = std::max(dims[q.u] * spacing[q.u], 1e-9) / o.pixelsPerPanel;
     scale[p] = std::max(1, int(std::lround(spacing[q.u] / mmPerPixel)));
     widths[p] = dims[q.u] * scale[p];
@@ -186,7 +161,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   }
   // The voxel a panel pixel shows.
   auto voxelAt = [&](int p, int x, int y, int ijk[3]) {
-    const Panel& q = panels[std::size_t(p)];
+    const detail::PanelAxes& q = panels[std::size_t(p)];
     ijk[q.fixed] = centre[q.fixed];
     const int right = std::min(dims[q.u] - 1, x / scale[p]);
     ijk[q.u] = q.uSign > 0 ? right : dims[q.u] - 1 - right;
@@ -198,7 +173,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   std::set<int> labelsShown;
   std::set<std::string> kindsShown;
   bool vertebraShown = false;
-  for (const Panel& q : panels) {
+  for (const detail::PanelAxes& q : panels) {
     int ijk[3];
     ijk[q.fixed] = centre[q.fixed];
     for (ijk[q.v] = 0; ijk[q.v] < dims[q.v]; ++ijk[q.v])
@@ -257,7 +232,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   PixelCanvas canvas(total, panelY + tallest + margins.bottom + legendHeight + border, kWhite);
 
   for (int p = 0; p < 3; ++p) {
-    const Panel& q = panels[std::size_t(p)];
+    const detail::PanelAxes& q = panels[std::size_t(p)];
     const int w = widths[p], h = heights[p];
     std::vector<char> vertebra(o.vertebraMask ? std::size_t(w) * std::size_t(h) : 0);
     for (int y = 0; y < h; ++y)

@@ -136,6 +136,21 @@ const char* planeName(const double direction[9], int normalAxis) {
   return kNames[patientAxis(direction, normalAxis)];
 }
 
+std::array<PanelAxes, 3> conventionalViews(const double direction[9]) {
+  int along[3] = {-1, -1, -1}; // the voxel axis along patient x, y, z
+  for (int a = 0; a < 3; ++a) {
+    const int r = patientAxis(direction, a);
+    if (along[r] >= 0) return {PanelAxes{0, 1, 2, +1, +1}, PanelAxes{0, 2, 1, +1, -1}, PanelAxes{1, 2, 0, +1, -1}};
+    along[r] = a;
+  }
+  auto sign = [&](int r) { return direction[r * 3 + along[r]] > 0 ? +1 : -1; };
+  // Right: +x (the patient's left) on the axial and coronal views, +y (posterior) on the sagittal one. Down: +y
+  // (posterior) on the axial view, -z (inferior) on the others.
+  return {PanelAxes{along[0], along[1], along[2], sign(0), sign(1)},
+          PanelAxes{along[0], along[2], along[1], sign(0), -sign(2)},
+          PanelAxes{along[1], along[2], along[0], sign(1), -sign(2)}};
+}
+
 PanelMargins annotationMargins(int fontPx) {
   const int row = fontPx + 6; // a text row with 3 px above and below
   const int letter = PixelCanvas::textSize("W", fontPx, true)[0] + 8;

@@ -52,6 +52,18 @@ int patientAxis(const double direction[9], int axis);
 // "sagittal", "coronal" or "axial": the plane normal to the given voxel axis.
 const char* planeName(const double direction[9], int normalAxis);
 
+// A view of a volume: which voxel axis runs to the right (u) and which downwards (v), and which way; which is fixed.
+struct PanelAxes {
+  int u, v, fixed;
+  int uSign, vSign; // +1: the index grows to the right (u) or downwards (v); -1: the other way
+};
+// The conventional views whatever order the voxels are stored in: [0] axial with the patient's right on the
+// left and anterior up (radiological convention), [1] coronal with the right on the left and superior up, [2]
+// sagittal with anterior on the left and superior up. Each patient axis is the voxel axis whose direction is mostly
+// along it; where two voxel axes are mostly along the same patient axis (an oblique grid near 45 degrees) the views
+// keep the stored order: index x right, y down (axial), z up (coronal, sagittal), and the letters say where they run.
+std::array<PanelAxes, 3> conventionalViews(const double direction[9]);
+
 // The labels around one image panel: a title row and the top edge's letter above it, the left and right edges'
 // letters beside it, the bottom edge's letter and a scale bar below it. All bold letters are centred on their edge.
 struct PanelAnnotation {

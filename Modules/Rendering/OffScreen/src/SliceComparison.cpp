@@ -30,26 +30,28 @@ bool isEmpty(vtkImageData* v) {
   return d[0] < 1 || d[1] < 1 || d[2] < 1;
 }
 
-// z range (mm) of voxels >= threshold; widens `lo`/`hi`.
+// The patient z (mm) of voxel (i, j, k): origin + direction (i sx, j sy, k sz), its z component.
+double patientZ(vtkImageData* v, int i, int j, int k) {
+  double p[3];
+  v->TransformIndexToPhysicalPoint(i, j, k, p);
+  return p[2];
+}
+
+// z range (mm, patient frame) of voxels >= threshold; widens `lo`/`hi`.
 void thresholdZRange(vtkImageData* v, double threshold, double& lo, double& hi) {
   if (isEmpty(v)) return;
   int d[3];
   v->GetDimensions(d);
-  double origin[3], spacing[3];
-  v->GetOrigin(origin);
-  v->GetSpacing(spacing);
   vtkDataArray* s = v->GetPointData()->GetScalars();
-  const vtkIdType plane = static_cast<vtkIdType>(d[0]) * d[1];
-  for (int k = 0; k < d[2]; ++k) {
-    for (vtkIdType p = 0; p < plane; ++p) {
-      if (s->GetComponent(k * plane + p, 0) >= threshold) {
-        const double z = origin[2] + k * spacing[2];
-        lo = std::min(lo, z);
-        hi = std::max(hi, z);
-        break;
-      }
-    }
-  }
+  vtkIdType n = 0;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i, ++n)
+        if (s->GetComponent(n, 0) >= threshold) {
+          const double z = patientZ(v, i, j, k);
+          lo = std::min(lo, z);
+          hi = std::max(hi, z);
+        }
 }
 
 void writePngAtomically(vtkImageData* image, const std::filesystem::path& png) {
@@ -99,12 +101,17 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
 
   std::vector<vtkImageData*> rows{postCT};
   if (simulatedCT != nullptr) rows.push_back(simulatedCT);
+  // Each volume in the conventional axial view however it is stored: the patient's right on the left, anterior up.
+  std::vector<detail::PanelAxes> views;
   int nx = 0, ny = 0;
   for (vtkImageData* v : rows) {
     int d[3];
     v->GetDimensions(d);
-    nx = std::max(nx, d[0]);
-    ny = std::max(ny, d[1]);
+    double direction[9];
+    std::copy_n(v->GetDirectionMatrix()->GetData(), 9, direction);
+    views.push_back(detail::conventionalViews(direction)[0]);
+    nx = std::max(nx, d[views.back().u]);
+    ny = std::max(ny, d[views.back().v]);
   }
   int scale = options.pixelScale;
   if (scale <= 0) scale = std::max(1, (160 + nx - 1) / nx);
@@ -127,6 +134,7 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
   const char* const rowNames[2] = {"post-op CT", "simulated CT"};
   for (std::size_t r = 0; r < rows.size(); ++r) {
     vtkImageData* v = rows[r];
+    const detail::PanelAxes& q = views[r];
     int d[3];
     double origin[3], spacing[3], direction[9];
     v->GetDimensions(d);
@@ -134,18 +142,23 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
     v->GetSpacing(spacing);
     std::copy_n(v->GetDirectionMatrix()->GetData(), 9, direction);
     vtkDataArray* s = v->GetPointData()->GetScalars();
-    const vtkIdType plane = static_cast<vtkIdType>(d[0]) * d[1];
+    // The patient z of a plane of the fixed axis: origin z + its direction's z component x spacing x index.
+    const double zPerPlane = direction[2 * 3 + q.fixed] * spacing[q.fixed];
     const int top = gap + static_cast<int>(r) * (cellH + gap) + m.top;
     for (std::size_t c = 0; c < z.size(); ++c) {
       const int leftPx = gap + static_cast<int>(c) * (cellW + gap) + m.left;
-      const long k = std::lround((z[c] - origin[2]) / spacing[2]);
-      const bool inside = k >= 0 && k < d[2];
+      int ijk[3];
+      const long plane = std::lround((z[c] - origin[2]) / zPerPlane);
+      const bool inside = plane >= 0 && plane < d[q.fixed];
+      ijk[q.fixed] = static_cast<int>(plane);
       for (int j = 0; j < panelH; ++j) {
         for (int i = 0; i < panelW; ++i) {
-          const int vi = i / scale, vj = j / scale; // voxel column / row; row vj = y index, drawn downwards
+          const int right = i / scale, down = j / scale; // voxels from the panel's left and top edges
           unsigned char grey = 0;
-          if (inside && vi < d[0] && vj < d[1]) {
-            const double hu = s->GetComponent(k * plane + static_cast<vtkIdType>(vj) * d[0] + vi, 0);
+          if (inside && right < d[q.u] && down < d[q.v]) {
+            ijk[q.u] = q.uSign > 0 ? right : d[q.u] - 1 - right;
+            ijk[q.v] = q.vSign > 0 ? down : d[q.v] - 1 - down;
+            const double hu = s->GetComponent(ijk[0] + static_cast<vtkIdType>(d[0]) * (ijk[1] + static_cast<vtkIdType>(d[1]) * ijk[2]), 0);
             // NaN (e.g. outside a resampled field of view) shows as black, like air.
             const double t = std::isnan(hu) ? 0.0 : std::clamp((hu - options.windowLowHU) / span, 0.0, 1.0);
             grey = static_cast<unsigned char>(std::lround(255.0 * t));
@@ -154,17 +167,16 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
         }
       }
       if (!options.annotate) continue;
-      // Voxel x runs to the right, y downwards; the letters say where they run in the patient.
       detail::PanelAnnotation a;
       std::ostringstream title;
-      title << rowNames[r] << ", " << detail::planeName(direction, 2) << " z = " << std::fixed << std::setprecision(1)
+      title << rowNames[r] << ", " << detail::planeName(direction, q.fixed) << " z = " << std::fixed << std::setprecision(1)
             << z[c] << " mm";
       a.title = title.str();
-      a.left = detail::patientLetter(direction, 0, -1);
-      a.right = detail::patientLetter(direction, 0, +1);
-      a.top = detail::patientLetter(direction, 1, -1);
-      a.bottom = detail::patientLetter(direction, 1, +1);
-      a.mmPerPixel = spacing[0] / scale;
+      a.left = detail::patientLetter(direction, q.u, -q.uSign);
+      a.right = detail::patientLetter(direction, q.u, q.uSign);
+      a.top = detail::patientLetter(direction, q.v, -q.vSign);
+      a.bottom = detail::patientLetter(direction, q.v, q.vSign);
+      a.mmPerPixel = spacing[q.u] / scale;
       a.scaleBarMm = options.scaleBarMm;
       detail::annotatePanel(canvas, leftPx, top, panelW, panelH, a, options.fontPx);
     }

@@ -41,8 +41,12 @@ std::vector<double> slicePositionsMm(vtkImageData* postCT, vtkImageData* simulat
                                      const SliceComparisonOptions& options = {});
 
 // Writes a PNG with one column per slice: row 1 postCT, row 2 simulatedCT (omitted when simulatedCT is
-// null), each panel in its labels' margins when annotate is set. Each slice is the nearest voxel plane to the z position in each volume (no interpolation); a
-// position outside a volume gives a black panel. Image x runs left to right, y (LPS: posterior) down.
+// null), each panel in its labels' margins when annotate is set. Each slice is the nearest voxel plane to
+// the patient z position in each volume (no interpolation); a position outside a volume gives a black
+// panel. Each panel is the conventional axial view however the volume is stored: the patient's right on
+// the left, anterior up (LPS x to the right, y down), each patient axis the voxel axis mostly along it
+// (flipped and permuted grids look the same; an oblique grid near 45 degrees keeps its stored order, voxel
+// x right and y down, and its letters name where those run).
 // Throws std::invalid_argument for a null/empty postCT, spacingMm <= 0, an empty HU window, no voxel
 // at or above the cement threshold (when zRangeMm is empty), or a negative or non-finite scaleBarMm;
 // std::runtime_error if the file cannot be written. The file is written atomically.
