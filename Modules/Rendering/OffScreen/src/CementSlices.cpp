@@ -97,6 +97,8 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
   if (o.tipMm) {
     std::array<double, 3> t{};
     ct->TransformPhysicalPointToContinuousIndex(o.tipMm->data(), t.data());
+    if (!std::isfinite(t[0]) || !std::isfinite(t[1]) || !std::isfinite(t[2]))
+      throw std::invalid_argument("cement slices: the cannula tip is not a finite point");
     tipIndex = t;
     if (o.directionUnit) {
       const auto& d = *o.directionUnit;

@@ -70,11 +70,11 @@ struct CementSlicesOptions {
 };
 
 // ct: scalar HU image; labels: the same grid, 0 no cement, 1 cement in bone, 2 leaked cement (as
-// cement_labels.nrrd), 3 a target region without cement (yellow; `cementsph plan`). centreMm: the slices' crossing
-// point in the CT's physical frame (mm; the images' index axes run along the patient axes: axis-aligned, possibly
-// permuted or mirrored, as inject writes them). Throws std::invalid_argument for images of different grids, a
-// centre outside, a zero or non-finite direction, or a negative or non-finite scaleBarMm; std::runtime_error when the PNG cannot
-// be written (none is left).
+// cement_labels.nrrd), 3 a target region without cement (yellow; `cementsph plan`). centreMm: the slices'
+// crossing point in the CT's physical frame (mm; the voxel axes run along the patient axes, possibly permuted
+// or mirrored, as inject writes them). Throws std::invalid_argument for images of different grids, a centre
+// outside, a non-finite tip, a zero or non-finite direction, or a negative or non-finite scaleBarMm;
+// std::runtime_error when the PNG cannot be written (none is left).
 void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<double, 3>& centreMm,
                        const std::filesystem::path& png, const CementSlicesOptions& options = {});
 
