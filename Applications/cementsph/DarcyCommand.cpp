@@ -1,11 +1,12 @@
 // cementsph darcy: the paper's Darcy permeability protocol (Figs. 1, 4, 5) over a sweep of porosities,
-// spacings and viscosities. Writes DIR/permeability.csv (and DIR/permeability.png).
+// spacings and viscosities. Writes DIR/permeability.csv (and DIR/permeability.png). A thin layer over
+// CementSPH::SPH's DarcyBenchmark.h (the runs) and DarcyTable.h (the CSV).
 #include "CommandRegistry.h"
 #include "OutputFiles.h"
 
 #include "cementsph/sph/DarcyBenchmark.h"
+#include "cementsph/sph/DarcyTable.h"
 #include "cementsph/sph/Presets.h"
-#include "cementsph/sph/Simulation.h"
 
 #include <omp.h>
 
@@ -55,7 +56,7 @@ void requireWithin(double x, double lo, double hi, const char* what, const char*
   }
 }
 
-int runDarcy(const DarcyOptions& o) {
+void checkOptions(const DarcyOptions& o) {
   // Porosity 1 leaves no solid: the permeability is infinite, not a number for the CSV.
   requireAll(o.porosities, "--porosities", [](double p) { return p > 0 && p < 1; });
   requireAll(o.spacingsMm, "--spacings-mm", [](double d) { return d >= 1e-3 && d <= 100; });
@@ -73,8 +74,10 @@ int runDarcy(const DarcyOptions& o) {
       {o.hOverD, "--h-over-d"}, {o.dragCoefficient, "--drag-coefficient"}, {o.soundSpeed, "--sound-speed-m-per-s"}};
   for (const auto& [x, option] : positive)
     if (!std::isfinite(x) || x < 0) throw std::invalid_argument(std::string(option) + ": must be a finite number > 0");
-  if (o.threads > 0) omp_set_num_threads(o.threads);
+}
 
+// The preset with the options' model settings over it.
+ModelPreset darcyPreset(const DarcyOptions& o) {
   ModelPreset preset = modelPreset(o.preset);
   ModelParameters& model = preset.model;
   if (!o.integrator.empty()) model.integrator = parseIntegrator(o.integrator);
@@ -84,10 +87,25 @@ int runDarcy(const DarcyOptions& o) {
   if (o.soundSpeed > 0) model.soundSpeed = o.soundSpeed;
   if (o.timeStep > 0) model.fixedTimeStep = o.timeStep;
   model.stepLimitPolicy = o.clampTimeStep ? StepLimitPolicy::Clamp : StepLimitPolicy::Refuse;
+  return preset;
+}
+
+void printCase(std::size_t done, std::size_t total, double porosity, double spacingMm, double viscosityPaS,
+               const DarcyResult& r) {
+  std::cerr << "[" << done << "/" << total << "] porosity " << porosity << ", spacing " << spacingMm << " mm, "
+            << viscosityPaS << " Pa.s: k/d^2 " << std::setprecision(4) << r.dimensionlessPermeability << ", R^2 "
+            << std::setprecision(6) << r.r2 << ", " << r.steps << " steps, " << std::setprecision(3) << r.wallSeconds
+            << " s" << (r.converged ? "" : "  (NOT converged: raise the step cap)") << "\n";
+}
+
+int runDarcy(const DarcyOptions& o) {
+  checkOptions(o);
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  const ModelPreset preset = darcyPreset(o);
+  const ModelParameters& model = preset.model;
   SteadyStateCriteria criteria;
   criteria.relativeTolerance = o.tolerance;
   criteria.maxSteps = o.maxSteps;
-
   std::cerr << "cementsph darcy: preset " << preset.name << " (h/d " << preset.hOverD << ", "
             << toString(model.integrator) << ", Cf " << model.dragCoefficient << "), " << o.lattice << "^3 lattice, "
             << omp_get_max_threads() << " threads\n";
@@ -95,30 +113,9 @@ int runDarcy(const DarcyOptions& o) {
   std::vector<DarcyResult> results;
   // The CSV is rewritten (atomically) after every case, so a long sweep keeps what it has done.
   const std::filesystem::path csvPath = std::filesystem::path(o.out) / "permeability.csv";
-  auto writeCsv = [&] {
-    std::ostringstream csv;
-    csv << "porosity,spacing_mm,viscosity_pa_s,slope_s,r2,permeability_m2,dimensionless_permeability,"
-           "kozeny_carman_dimensionless,steps,wall_s,converged,intercept_m_per_s,h_over_d,drag_coefficient,integrator\n";
-    csv << std::setprecision(8);
-    for (const DarcyResult& r : results) {
-      // Never a NaN or inf in the table: a case whose fit is not finite is a failed run, named.
-      for (double x : {r.slope, r.r2, r.permeability, r.dimensionlessPermeability, r.intercept,
-                       kozenyCarmanDimensionless(r.porosity)})
-        if (!std::isfinite(x))
-          throw cementsph::sph::SimulationError("the Darcy case at porosity " + std::to_string(r.porosity) +
-                                                " gave a non-finite fit (" + std::to_string(x) +
-                                                "); nothing written for it");
-      csv << r.porosity << ',' << r.input.spacing * 1e3 << ',' << r.input.viscosity << ',' << r.slope << ',' << r.r2
-          << ',' << r.permeability << ',' << r.dimensionlessPermeability << ','
-          << kozenyCarmanDimensionless(r.porosity) << ',' << r.steps << ',' << r.wallSeconds << ','
-          << (r.converged ? 1 : 0) << ',' << r.intercept << ',' << preset.hOverD << ',' << model.dragCoefficient
-          << ',' << toString(model.integrator) << '\n';
-    }
-    app::writeFileAtomically(csvPath, csv.str());
-  };
+  const DarcyTableModel tableModel{preset.hOverD, model.dragCoefficient, toString(model.integrator)};
   DarcyBenchmark bench(model, preset.hOverD, criteria);
   const std::size_t total = o.porosities.size() * o.spacingsMm.size() * o.viscositiesPaS.size();
-  std::size_t done = 0;
   for (double spacing : o.spacingsMm)
     for (double mu : o.viscositiesPaS)
       for (double phi : o.porosities) {
@@ -129,17 +126,11 @@ int runDarcy(const DarcyOptions& o) {
         c.viscosity = mu;
         c.seed = o.seed;
         c.bodyForces = o.bodyForces;
-        DarcyResult r = bench.run(c, [](const std::string& line) { std::cerr << "  " << line << "\n"; });
-        ++done;
-        std::cerr << "[" << done << "/" << total << "] porosity " << phi << ", spacing " << spacing << " mm, "
-                  << mu << " Pa.s: k/d^2 " << std::setprecision(4) << r.dimensionlessPermeability << ", R^2 "
-                  << std::setprecision(6) << r.r2 << ", " << r.steps << " steps, " << std::setprecision(3)
-                  << r.wallSeconds << " s" << (r.converged ? "" : "  (NOT converged: raise the step cap)") << "\n";
-        results.push_back(std::move(r));
-        writeCsv();
+        results.push_back(bench.run(c, [](const std::string& line) { std::cerr << "  " << line << "\n"; }));
+        printCase(results.size(), total, phi, spacing, mu, results.back());
+        app::writeFileAtomically(csvPath, darcyPermeabilityCsv(results, tableModel));
       }
   std::cout << "wrote " << csvPath.string() << "\n";
-
   if (!o.noPlot) {
     const std::filesystem::path png = std::filesystem::path(o.out) / "permeability.png";
     app::writeDarcyPlot(results, png);
