@@ -64,6 +64,72 @@ void requireSameGrid(vtkImageData* image, const int dims[3], const char* what) {
 
 double voxel(vtkImageData* image, const int ijk[3]) { return image->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0); }
 
+// The legend: one entry per colour the picture uses, left to right, wrapped to the picture's width.
+class Legend {
+public:
+  enum class Mark { Swatch, Ring, Line, Outline };
+  void add(Mark mark, Rgb colour, std::string words) { entries_.push_back({mark, colour, std::move(words), 0, 0}); }
+  bool empty() const { return entries_.empty(); }
+  // Places the entries from (x0, y0) within [x0, x1); returns the rows' height (px).
+  int layout(int x0, int x1, int y0, int fontPx) {
+    fontPx_ = fontPx;
+    const int row = fontPx + 8;
+    int x = x0, y = y0;
+    for (Entry& e : entries_) {
+      const int w = fontPx + 6 + PixelCanvas::textSize(e.words, fontPx)[0] + 16;
+      if (x > x0 && x + w > x1) x = x0, y += row;
+      e.x = x, e.y = y;
+      x += w;
+    }
+    return entries_.empty() ? 0 : y + row - y0;
+  }
+  void draw(PixelCanvas& canvas) const {
+    const int swatch = fontPx_;
+    for (const Entry& e : entries_) {
+      const int x = e.x, y = e.y + 2;
+      switch (e.mark) {
+      case Mark::Swatch: canvas.fillRect(x, y, swatch, swatch, e.colour); break;
+      case Mark::Ring: canvas.ring(x + 0.5 * swatch, y + 0.5 * swatch, 0.5 * swatch - 2, 2.0, e.colour); break;
+      case Mark::Line:
+        canvas.line(x, y + 0.5 * swatch, x + swatch, y + 0.5 * swatch, 2.0, e.colour, {0, canvas.width(), 0, canvas.height()});
+        break;
+      case Mark::Outline:
+        canvas.fillRect(x, y, swatch, swatch, e.colour);
+        canvas.fillRect(x + 2, y + 2, swatch - 4, swatch - 4, kWhite);
+        break;
+      }
+      canvas.text(e.words, x + swatch + 6, y, fontPx_, kBlack);
+    }
+  }
+
+private:
+  struct Entry {
+    Mark mark;
+    Rgb colour;
+    std::string words;
+    int x, y;
+  };
+  std::vector<Entry> entries_;
+  int fontPx_ = 14;
+};
+
+// Outlines a region of a panel: its pixels within 2 px of a pixel outside it (the panel's edge is no boundary).
+// inside: w x h flags, row by row; (x0, y0): the panel's top-left pixel on the canvas.
+void drawOutline(PixelCanvas& canvas, const std::vector<char>& inside, int w, int h, int x0, int y0, Rgb colour) {
+  auto in = [&](int x, int y) { return inside[std::size_t(y) * std::size_t(w) + std::size_t(x)] != 0; };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!in(x, y)) continue;
+      bool edge = false;
+      for (int s = 1; s <= 2 && !edge; ++s)
+        for (const auto& d : {std::array<int, 2>{s, 0}, {-s, 0}, {0, s}, {0, -s}}) {
+          const int xx = x + d[0], yy = y + d[1];
+          if (xx >= 0 && yy >= 0 && xx < w && yy < h && !in(xx, yy)) edge = true;
+        }
+      if (edge) canvas.set(x0 + x, y0 + y, colour);
+    }
+}
+
 } // namespace
 
 void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<double, 3>& centreMm,
@@ -186,27 +252,21 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
         if (o.vertebraMask && !vertebraShown) vertebraShown = inVertebra(ijk);
       }
   }
-  struct LegendEntry {
-    enum Kind { Swatch, Ring, Line, Outline } kind;
-    Rgb colour;
-    std::string words;
-  };
-  std::vector<LegendEntry> legend;
+  Legend legend;
   auto halfOverGrey = [](Rgb c) { // how a half-transparent overlay looks on the bone window's mid grey
     return Rgb{static_cast<unsigned char>(std::lround(0.5 * 127.5 + 0.5 * c[0])),
                static_cast<unsigned char>(std::lround(0.5 * 127.5 + 0.5 * c[1])),
                static_cast<unsigned char>(std::lround(0.5 * 127.5 + 0.5 * c[2]))};
   };
-  if (labelsShown.count(1)) legend.push_back({LegendEntry::Swatch, halfOverGrey({40, 110, 255}), "cement in bone"});
-  if (labelsShown.count(3)) legend.push_back({LegendEntry::Swatch, halfOverGrey({255, 220, 0}), "target without cement"});
+  if (labelsShown.count(1)) legend.add(Legend::Mark::Swatch, halfOverGrey({40, 110, 255}), "cement in bone");
+  if (labelsShown.count(3)) legend.add(Legend::Mark::Swatch, halfOverGrey({255, 220, 0}), "target without cement");
   for (const LeakStyle& s : kLeakStyles)
-    if (kindsShown.count(s.kind)) legend.push_back({LegendEntry::Swatch, s.colour, s.words});
+    if (kindsShown.count(s.kind)) legend.add(Legend::Mark::Swatch, s.colour, s.words);
   for (const std::string& kind : kindsShown)
-    if (!styled(kind))
-      legend.push_back({LegendEntry::Swatch, kLeakUnknown, kind.empty() ? "leaked cement" : "leak: " + kind});
-  if (tipIndex) legend.push_back({LegendEntry::Ring, kTip, "cannula tip (projected)"});
-  if (shaftEndIndex) legend.push_back({LegendEntry::Line, kTrajectory, "trajectory (projected)"});
-  if (vertebraShown) legend.push_back({LegendEntry::Outline, kVertebra, "vertebra"});
+    if (!styled(kind)) legend.add(Legend::Mark::Swatch, kLeakUnknown, kind.empty() ? "leaked cement" : "leak: " + kind);
+  if (tipIndex) legend.add(Legend::Mark::Ring, kTip, "cannula tip (projected)");
+  if (shaftEndIndex) legend.add(Legend::Mark::Line, kTrajectory, "trajectory (projected)");
+  if (vertebraShown) legend.add(Legend::Mark::Outline, kVertebra, "vertebra");
 
   // Layout: the panels side by side, each in its margins for the labels; the legend below.
   const detail::PanelMargins margins = o.annotate ? detail::annotationMargins(o.fontPx) : detail::PanelMargins{};
@@ -218,19 +278,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
     tallest = std::max(tallest, heights[p]);
   }
   const int panelY = border + margins.top;
-  const int row = o.fontPx + 8, swatch = o.fontPx;
-  std::vector<std::array<int, 2>> legendAt; // each entry's top-left corner
-  int legendHeight = 0;
-  if (o.annotate && !legend.empty()) {
-    int x = border, y = panelY + tallest + margins.bottom + 4;
-    for (const LegendEntry& e : legend) {
-      const int w = swatch + 6 + PixelCanvas::textSize(e.words, o.fontPx)[0] + 16;
-      if (x > border && x + w > total - border) x = border, y += row;
-      legendAt.push_back({x, y});
-      x += w;
-    }
-    legendHeight = legendAt.back()[1] + row - (panelY + tallest + margins.bottom);
-  }
+  const int legendHeight = o.annotate ? legend.layout(border, total - border, panelY + tallest + margins.bottom + 4, o.fontPx) + 4 : 0;
   PixelCanvas canvas(total, panelY + tallest + margins.bottom + legendHeight + border, kWhite);
 
   for (int p = 0; p < 3; ++p) {
@@ -262,20 +310,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
                     static_cast<unsigned char>(std::lround(rgb[2]))});
         if (o.vertebraMask) vertebra[std::size_t(y) * std::size_t(w) + std::size_t(x)] = inVertebra(ijk);
       }
-    // The vertebra's outline: its pixels within 2 px of a pixel outside it (the panel's edge is no boundary).
-    if (o.vertebraMask)
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-          if (!vertebra[std::size_t(y) * std::size_t(w) + std::size_t(x)]) continue;
-          bool edge = false;
-          for (int s = 1; s <= 2 && !edge; ++s)
-            for (const auto& d : {std::array<int, 2>{s, 0}, {-s, 0}, {0, s}, {0, -s}}) {
-              const int xx = x + d[0], yy = y + d[1];
-              if (xx >= 0 && yy >= 0 && xx < w && yy < h && !vertebra[std::size_t(yy) * std::size_t(w) + std::size_t(xx)])
-                edge = true;
-            }
-          if (edge) canvas.set(panelX[p] + x, panelY + y, kVertebra);
-        }
+    if (o.vertebraMask) drawOutline(canvas, vertebra, w, h, panelX[p], panelY, kVertebra);
     // The cannula, projected onto the panel's plane.
     auto toPixel = [&](const std::array<double, 3>& c) {
       const double cu = c[std::size_t(q.u)], cv = c[std::size_t(q.v)];
@@ -309,23 +344,7 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
       detail::annotatePanel(canvas, panelX[p], panelY, w, h, a, o.fontPx);
     }
   }
-  if (o.annotate)
-    for (std::size_t e = 0; e < legend.size(); ++e) {
-      const int x = legendAt[e][0], y = legendAt[e][1] + 2;
-      const LegendEntry& entry = legend[e];
-      switch (entry.kind) {
-      case LegendEntry::Swatch: canvas.fillRect(x, y, swatch, swatch, entry.colour); break;
-      case LegendEntry::Ring: canvas.ring(x + 0.5 * swatch, y + 0.5 * swatch, 0.5 * swatch - 2, 2.0, entry.colour); break;
-      case LegendEntry::Line:
-        canvas.line(x, y + 0.5 * swatch, x + swatch, y + 0.5 * swatch, 2.0, entry.colour, {0, canvas.width(), 0, canvas.height()});
-        break;
-      case LegendEntry::Outline:
-        canvas.fillRect(x, y, swatch, swatch, entry.colour);
-        canvas.fillRect(x + 2, y + 2, swatch - 4, swatch - 4, kWhite);
-        break;
-      }
-      canvas.text(entry.words, x + swatch + 6, y, o.fontPx, kBlack);
-    }
+  if (o.annotate) legend.draw(canvas);
   writeImagePng(canvas.toImage(), png);
 }
 
