@@ -58,6 +58,11 @@ TEST(CannulaDirection, AGivenDirectionRunsEvenTheDefaultsValue) {
   SceneConfig inCode = sceneFromJson(sceneAtCentre());
   inCode.direction = Eigen::Vector3d(0, -1, 0);
   EXPECT_NEAR(runInjection(vertebralBody(), inCode, {}).summary.volumeInjectedMl, 0.05, 1e-9);
+  // Set in code to the default's value, recorded as given (what plan does with its trajectory).
+  SceneConfig upward = sceneFromJson(sceneAtCentre());
+  upward.direction = Eigen::Vector3d::UnitZ();
+  upward.explicitKeys.insert("direction");
+  EXPECT_NEAR(runInjection(vertebralBody(), upward, {}).summary.volumeInjectedMl, 0.05, 1e-9);
 }
 
 TEST(CannulaDirection, ThePorousScaffoldKeepsTheDefault) {

@@ -32,6 +32,7 @@ scene::SceneConfig bestPlanScene(const PlanResult& plan, const PlanRequest& requ
   scene::SceneConfig s = request.scene;
   s.tipMm = plan.best.tipMm;
   s.direction = request.direction.normalized();
+  s.explicitKeys.insert("direction"); // the trajectory is given, whatever its value (a vertebra needs one)
   s.volumeMl = plan.best.volumeMl;
   if (plan.best.secondTip) {
     s.secondTipWithdrawalMm = plan.best.depthMm - plan.best.secondDepthMm;
