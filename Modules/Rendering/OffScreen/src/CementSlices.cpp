@@ -278,7 +278,8 @@ void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<
     tallest = std::max(tallest, heights[p]);
   }
   const int panelY = border + margins.top;
-  const int legendHeight = o.annotate ? legend.layout(border, total - border, panelY + tallest + margins.bottom + 4, o.fontPx) + 4 : 0;
+  const int legendTop = panelY + tallest + margins.bottom + 4;
+  const int legendHeight = o.annotate && !legend.empty() ? legend.layout(border, total - border, legendTop, o.fontPx) + 4 : 0;
   PixelCanvas canvas(total, panelY + tallest + margins.bottom + legendHeight + border, kWhite);
 
   for (int p = 0; p < 3; ++p) {
