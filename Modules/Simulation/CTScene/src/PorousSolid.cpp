@@ -4,6 +4,7 @@
 #include <cmath>
 #include <deque>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -78,19 +79,24 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
   s.upperM = s.grid.origin + s.grid.spacing.cwiseProduct(
                                  Eigen::Vector3d(s.grid.size[0] - 0.5, s.grid.size[1] - 0.5, s.grid.size[2] - 0.5));
   const int nx = s.grid.size[0], ny = s.grid.size[1], nz = s.grid.size[2];
+  // Threshold, a row at a time straight from the buffer (GetPixel per voxel cost a whole-scan region a
+  // large share of the run): ITK stores x fastest, so a row of the region is contiguous.
   s.solid.assign(s.grid.count(), 0);
+  const auto* pixels = ct->GetBufferPointer();
   for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        imaging::ImageType::IndexType idx;
-        idx[0] = start[0] + s.roiStart[0] + i;
-        idx[1] = start[1] + s.roiStart[1] + j;
-        idx[2] = start[2] + s.roiStart[2] + k;
-        if (double(ct->GetPixel(idx)) > o.thresholdHu) {
-          s.solid[s.grid.index(i, j, k)] = 1;
+    for (int j = 0; j < ny; ++j) {
+      imaging::ImageType::IndexType idx;
+      idx[0] = start[0] + s.roiStart[0];
+      idx[1] = start[1] + s.roiStart[1] + j;
+      idx[2] = start[2] + s.roiStart[2] + k;
+      const auto* row = pixels + ct->ComputeOffset(idx);
+      std::uint8_t* out = &s.solid[s.grid.index(0, j, k)];
+      for (int i = 0; i < nx; ++i)
+        if (double(row[i]) > o.thresholdHu) {
+          out[i] = 1;
           ++s.solidVoxels;
         }
-      }
+    }
 
   const int ti = int(tipIndex[0] - s.roiStart[0]), tj = int(tipIndex[1] - s.roiStart[1]),
             tk = int(tipIndex[2] - s.roiStart[2]);
@@ -103,24 +109,28 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
     throw std::invalid_argument(m.str());
   }
 
-  // Pore space 6-connected to the tip within the ROI.
+  // Pore space 6-connected to the tip within the ROI (flat indices: the grid is x fastest).
   {
     std::vector<std::uint8_t> seen(s.grid.count(), 0);
-    std::deque<std::array<int, 3>> queue{{ti, tj, tk}};
-    seen[s.grid.index(ti, tj, tk)] = 1;
-    const int steps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    const std::size_t sx = 1, sy = std::size_t(nx), sz = std::size_t(nx) * std::size_t(ny);
+    std::deque<std::size_t> queue{s.grid.index(ti, tj, tk)};
+    seen[queue.front()] = 1;
     while (!queue.empty()) {
-      const auto v = queue.front();
+      const std::size_t n = queue.front();
       queue.pop_front();
       ++s.connectedPoreVoxels;
-      for (const auto& st : steps) {
-        const int a = v[0] + st[0], b = v[1] + st[1], c = v[2] + st[2];
-        if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-        const std::size_t n = s.grid.index(a, b, c);
-        if (seen[n] || s.solid[n]) continue;
-        seen[n] = 1;
-        queue.push_back({a, b, c});
-      }
+      const int i = int(n % sy), j = int((n / sy) % std::size_t(ny)), k = int(n / sz);
+      auto visit = [&](bool inside, std::size_t m) {
+        if (!inside || seen[m] || s.solid[m]) return;
+        seen[m] = 1;
+        queue.push_back(m);
+      };
+      visit(i + 1 < nx, n + sx);
+      visit(i > 0, n - sx);
+      visit(j + 1 < ny, n + sy);
+      visit(j > 0, n - sy);
+      visit(k + 1 < nz, n + sz);
+      visit(k > 0, n - sz);
     }
   }
   const double voxelMm3 = spacing.prod();
@@ -132,33 +142,77 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
     throw std::invalid_argument(m.str());
   }
 
-  // Offsets within reach, nearest first (most solid surface voxels find a pore at once).
-  std::vector<std::pair<double, std::array<int, 3>>> byDistance;
+  // Kept solid: a pore voxel at offset (a, b, c), |a| <= ri, |b| <= rj, |c| <= rk, with
+  // d2 = (a sx)^2 + (b sy)^2 + (c sz)^2 <= reach^2 (1 + 1e-12). Separably, one axis at a time (each solid
+  // voxel scanning every offset within reach cost the whole-scan region O(N r^3)): per row the nearest pore
+  // along x, then per plane the least (a sx)^2 + (b sy)^2 over the rows within rj, then per solid voxel the
+  // least of that plus (c sz)^2 over the planes within rk. The sums are formed in the same order,
+  // ((a sx)^2 + (b sy)^2) + (c sz)^2, and rounding is monotone, so the least sum is exactly the least of the
+  // per-offset sums: the same voxels are kept as by testing every offset.
   const int ri = int(std::floor(o.reachMm / spacing[0])), rj = int(std::floor(o.reachMm / spacing[1])),
             rk = int(std::floor(o.reachMm / spacing[2]));
-  for (int c = -rk; c <= rk; ++c)
-    for (int b = -rj; b <= rj; ++b)
-      for (int a = -ri; a <= ri; ++a) {
-        const double d2 = std::pow(a * spacing[0], 2) + std::pow(b * spacing[1], 2) + std::pow(c * spacing[2], 2);
-        if ((a || b || c) && d2 <= o.reachMm * o.reachMm * (1 + 1e-12)) byDistance.push_back({d2, {a, b, c}});
+  const double reach2 = o.reachMm * o.reachMm * (1 + 1e-12);
+  auto squares = [](int r, double h) {
+    std::vector<double> q(std::size_t(r) + 1);
+    for (int a = 0; a <= r; ++a) q[std::size_t(a)] = std::pow(a * h, 2);
+    return q;
+  };
+  const std::vector<double> ax = squares(ri, spacing[0]), by = squares(rj, spacing[1]), cz = squares(rk, spacing[2]);
+  const double none = std::numeric_limits<double>::infinity();
+  const std::size_t plane = std::size_t(nx) * std::size_t(ny);
+  // Per plane: the least (a sx)^2 + (b sy)^2 to a pore of that plane, for planes k - rk .. k + rk (a ring).
+  const int ringSize = 2 * rk + 1;
+  std::vector<double> ring(std::size_t(ringSize) * plane, none);
+  std::vector<int> nearestX(plane); // per voxel of one plane: |a| of the nearest pore in its row within ri, or -1
+  auto fillPlane = [&](int k) {
+    const std::uint8_t* solidPlane = &s.solid[std::size_t(k) * plane];
+    for (int j = 0; j < ny; ++j) {
+      const std::uint8_t* row = solidPlane + std::size_t(j) * std::size_t(nx);
+      int* near = &nearestX[std::size_t(j) * std::size_t(nx)];
+      long last = -(long(ri) + 1) - 1;
+      for (int i = 0; i < nx; ++i) {
+        if (!row[i]) last = i;
+        near[i] = i - last <= ri ? int(i - last) : -1;
       }
-  std::sort(byDistance.begin(), byDistance.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  std::vector<std::uint8_t> keep(s.grid.count(), 0);
-#pragma omp parallel for schedule(dynamic)
-  for (int k = 0; k < nz; ++k)
+      last = long(nx) + long(ri) + 1;
+      for (int i = nx - 1; i >= 0; --i) {
+        if (!row[i]) last = i;
+        if (last - i <= ri && (near[i] < 0 || last - i < near[i])) near[i] = int(last - i);
+      }
+    }
+    double* g = &ring[std::size_t(k % ringSize) * plane];
+#pragma omp parallel for schedule(static)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        const std::size_t n = s.grid.index(i, j, k);
+        double best = none;
+        for (int b = std::max(-rj, -j); b <= std::min(rj, ny - 1 - j); ++b) {
+          const int a = nearestX[std::size_t(j + b) * std::size_t(nx) + std::size_t(i)];
+          if (a >= 0) best = std::min(best, ax[std::size_t(a)] + by[std::size_t(std::abs(b))]);
+        }
+        g[std::size_t(j) * std::size_t(nx) + std::size_t(i)] = best;
+      }
+  };
+  std::vector<std::uint8_t> keep(s.grid.count(), 0);
+  std::size_t kept = 0;
+  for (int m = 0; m < std::min(rk, nz); ++m) fillPlane(m);
+  for (int k = 0; k < nz; ++k) {
+    if (k + rk < nz) fillPlane(k + rk);
+    const int c0 = std::max(-rk, -k), c1 = std::min(rk, nz - 1 - k);
+#pragma omp parallel for schedule(static) reduction(+ : kept)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t inPlane = std::size_t(j) * std::size_t(nx) + std::size_t(i);
+        const std::size_t n = std::size_t(k) * plane + inPlane;
         if (!s.solid[n]) continue;
-        for (const auto& [d2, off] : byDistance) {
-          const int a = i + off[0], b = j + off[1], c = k + off[2];
-          if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-          if (!s.solid[s.grid.index(a, b, c)]) {
+        for (int c = c0; c <= c1; ++c)
+          if (ring[std::size_t((k + c) % ringSize) * plane + inPlane] + cz[std::size_t(std::abs(c))] <= reach2) {
             keep[n] = 1;
+            ++kept;
             break;
           }
-        }
       }
+  }
+  s.positions.reserve(kept);
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
