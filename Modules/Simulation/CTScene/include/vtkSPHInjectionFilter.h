@@ -65,7 +65,9 @@ public:
 
   vtkSetVector3Macro(TipMm, double);
   vtkGetVector3Macro(TipMm, double);
-  vtkSetVector3Macro(Direction, double);
+  // Setting a direction (even the default +z) counts as giving one: a patient CT needs one (issue 20).
+  void SetDirection(double x, double y, double z);
+  void SetDirection(const double d[3]) { this->SetDirection(d[0], d[1], d[2]); }
   vtkGetVector3Macro(Direction, double);
   vtkSetMacro(ParticleRadiusMm, double);
   vtkGetMacro(ParticleRadiusMm, double);
@@ -126,6 +128,7 @@ protected:
 
   double TipMm[3] = {0, 0, 0};
   double Direction[3] = {0, 0, 1};
+  bool DirectionGiven = false; // SetDirection was called, or SetScene brought a given direction
   double ParticleRadiusMm, CannulaInnerDiameterMm, CannulaLengthMm, FlowRateMlPerS, VolumeMl, ViscosityPaS,
       ThresholdHU, ROISizeMm, SnapshotIntervalS, SolidMassFactor;
   bool CannulaWall;

@@ -120,12 +120,22 @@ void vtkSPHInjectionFilter::SetOutputDirectory(const std::string& dir) {
   this->Modified();
 }
 
+void vtkSPHInjectionFilter::SetDirection(double x, double y, double z) {
+  this->DirectionGiven = true;
+  if (this->Direction[0] == x && this->Direction[1] == y && this->Direction[2] == z) return;
+  this->Direction[0] = x;
+  this->Direction[1] = y;
+  this->Direction[2] = z;
+  this->Modified();
+}
+
 void vtkSPHInjectionFilter::SetScene(const cementsph::scene::SceneConfig& s) {
   this->Base = s;
   if (s.tipMm) {
     for (int a = 0; a < 3; ++a) this->TipMm[a] = (*s.tipMm)[a];
   }
   for (int a = 0; a < 3; ++a) this->Direction[a] = s.direction[a];
+  this->DirectionGiven = s.directionGiven();
   this->ParticleRadiusMm = s.particleRadiusMm;
   this->CannulaInnerDiameterMm = s.cannulaInnerDiameterMm;
   this->CannulaLengthMm = s.cannulaLengthMm;
@@ -144,6 +154,7 @@ cementsph::scene::SceneConfig vtkSPHInjectionFilter::GetScene() const {
   cementsph::scene::SceneConfig s = this->Base;
   s.tipMm = Eigen::Vector3d(this->TipMm[0], this->TipMm[1], this->TipMm[2]);
   s.direction = Eigen::Vector3d(this->Direction[0], this->Direction[1], this->Direction[2]);
+  if (this->DirectionGiven) s.explicitKeys.insert("direction");
   s.particleRadiusMm = this->ParticleRadiusMm;
   s.cannulaInnerDiameterMm = this->CannulaInnerDiameterMm;
   s.cannulaLengthMm = this->CannulaLengthMm;
