@@ -2,6 +2,8 @@
 // and `inject` its X-ray sequence. Each command's file fills its request from the command line and calls the
 // same function, so no subcommand is re-entered through argv strings. Every field is an option of the
 // command of the same name (`cementsph <command> --help`); the defaults are the options' defaults.
+// Each returns the command's exit status and, when `metrics` is given, fills it with what the command wrote to
+// its metrics.json, so that a caller (demo) need not read back the file.
 #pragma once
 
 #include "DrrOptions.h"
@@ -9,6 +11,8 @@
 #include "cementsph/drr/XraySequence.h"
 #include "cementsph/imaging/CementSegmentation.h"
 #include "cementsph/surfacemetrics/Isosurface.h"
+
+#include <nlohmann/json_fwd.hpp>
 
 #include <optional>
 #include <string>
@@ -24,7 +28,7 @@ struct InjectRequest {
   int threads = 0;                    // 0: the cores the load average leaves free
   bool quiet = false, noPictures = false, allowLarge = false;
 };
-int runInject(const InjectRequest& request);
+int runInject(const InjectRequest& request, nlohmann::json* metrics = nullptr);
 
 // `cementsph compare`.
 struct CompareRequest {
@@ -36,7 +40,7 @@ struct CompareRequest {
   double smoothingVoxels = surfacemetrics::IsosurfaceOptions{}.smoothingSigmaVoxels;
   bool noRegistration = false, noCementMask = false, noPictures = false;
 };
-int runCompare(const CompareRequest& request);
+int runCompare(const CompareRequest& request, nlohmann::json* metrics = nullptr);
 
 // `cementsph xray`.
 struct XrayRequest {
@@ -54,6 +58,6 @@ struct XrayRequest {
   int maxColumns = 6;
   bool noPictures = false;
 };
-int runXray(const XrayRequest& request);
+int runXray(const XrayRequest& request, nlohmann::json* metrics = nullptr);
 
 } // namespace cementsph::app

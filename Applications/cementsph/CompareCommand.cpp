@@ -133,7 +133,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
 
 namespace cementsph::app {
 
-int runCompare(const CompareRequest& a) {
+int runCompare(const CompareRequest& a, nlohmann::json* metrics) {
   study::CementComparisonRequest request;
   request.pre = a.pre;
   request.post = a.post;
@@ -165,6 +165,7 @@ int runCompare(const CompareRequest& a) {
     comparison.metrics["render_backend"] = rendering::renderBackendName(*backend);
     study::writeCementComparisonMetrics(comparison, out);
   }
+  if (metrics) *metrics = comparison.metrics;
   printSummary(comparison, out);
   return pictures.status();
 }

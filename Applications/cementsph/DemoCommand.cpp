@@ -51,6 +51,28 @@ std::string vec3(const nlohmann::json& v) {
   return s.str();
 }
 
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The plan's volume, rate and viscosity as scene overrides (the keys of truth.json's "injection").
+std::vector<std::string> planOverrides(const nlohmann::json& plan) {
+  return {"tip_mm=" + plan.at("tip_mm").dump(), "volume_ml=" + exactNumber(plan.at("volume_ml").get<double>()),
+          "flow_rate_ml_per_s=" + exactNumber(plan.at("flow_rate_ml_per_s").get<double>()),
+          "viscosity_pa_s=" + exactNumber(plan.at("viscosity_pa_s").get<double>())};
+}
+
+void printVertebraSummary(const nlohmann::json& m, const fs::path& out) {
+  std::cout << "demo --vertebra: " << m.at("bone_model").get<std::string>() << " bone (porosity at the tip "
+            << m.at("porosity_at_tip").get<double>() << "), " << m.at("cement_volume_ml").get<double>()
+            << " ml injected, syringe pressure " << m.at("injection_pressure_pa").get<double>() * 1e-6 << " MPa; leakage "
+            << m.at("leakage_volume_ml").get<double>() << " ml at " << m.at("leakage_sites").size() << " site(s)";
+  for (const auto& s : m.at("leakage_sites"))
+    std::cout << "; " << s.at("volume_ml").get<double>() << " ml at (" << vec3(s.at("position_mm")) << ") mm from "
+              << s.at("first_time_s").get<double>() << " s";
+  std::cout << ". Files: " << (out / "metrics.json").string() << ", " << (out / "inject").string() << "\n";
+}
+
 // demo --vertebra: the clinical vertebra phantom read as its DICOM series, 4 ml by the transpedicular plan of
 // its truth.json, with the continuum bone model and the leakage report.
 int runVertebraDemo(const DemoOptions& o) {
@@ -66,32 +88,93 @@ int runVertebraDemo(const DemoOptions& o) {
   inject.ct = (phantom / "pre_dicom").string();
   inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
   inject.overrides = {"direction=[" + exactNumber(d.at(0).get<double>()) + "," + exactNumber(d.at(1).get<double>()) + "," +
-                          exactNumber(d.at(2).get<double>()) + "]",
-                      "tip_mm=" + plan.at("tip_mm").dump(), "volume_ml=" + exactNumber(plan.at("volume_ml").get<double>()),
-                      "flow_rate_ml_per_s=" + exactNumber(plan.at("flow_rate_ml_per_s").get<double>()),
-                      "viscosity_pa_s=" + exactNumber(plan.at("viscosity_pa_s").get<double>())};
+                      exactNumber(d.at(2).get<double>()) + "]"};
+  for (const std::string& override : planOverrides(plan)) inject.overrides.push_back(override);
   inject.threads = o.threads;
   inject.out = (out / "inject").string();
-  const int rc = cementsph::app::runInject(inject);
+  nlohmann::json m;
+  const int rc = cementsph::app::runInject(inject, &m);
   if (rc != 0 && rc != 3) return rc;
-  const nlohmann::json m = readJson(out / "inject" / "metrics.json");
   nlohmann::json summary;
   for (const char* k : {"bone_model", "bone_model_reason", "porosity_at_tip", "permeability_at_tip_m2", "volume_injected_ml",
                         "cement_volume_ml", "mean_spreading_distance_mm", "final_tip_pressure_pa", "max_tip_pressure_pa",
                         "injection_pressure_pa", "leakage_volume_ml", "leakage_sites", "wall_time_s"})
     summary[k] = m.contains(k) ? m[k] : nlohmann::json(nullptr);
-  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary["wall_time_s"] = secondsSince(start);
   summary["provenance"] = cementsph::provenance::toJson();
   cementsph::imaging::writeTextAtomically((out / "metrics.json").string(), summary.dump(2) + "\n");
-  std::cout << "demo --vertebra: " << m.at("bone_model").get<std::string>() << " bone (porosity at the tip "
-            << m.at("porosity_at_tip").get<double>() << "), " << m.at("cement_volume_ml").get<double>()
-            << " ml injected, syringe pressure " << m.at("injection_pressure_pa").get<double>() * 1e-6 << " MPa; leakage "
-            << m.at("leakage_volume_ml").get<double>() << " ml at " << m.at("leakage_sites").size() << " site(s)";
-  for (const auto& s : m.at("leakage_sites"))
-    std::cout << "; " << s.at("volume_ml").get<double>() << " ml at (" << vec3(s.at("position_mm")) << ") mm from "
-              << s.at("first_time_s").get<double>() << " s";
-  std::cout << ". Files: " << (out / "metrics.json").string() << ", " << (out / "inject").string() << "\n";
+  printVertebraSummary(m, out);
   return rc;
+}
+
+nlohmann::json pick(const nlohmann::json& from, std::initializer_list<const char*> keys) {
+  nlohmann::json j;
+  for (const char* k : keys) j[k] = from.contains(k) ? from[k] : nlohmann::json(nullptr);
+  return j;
+}
+
+// The metrics of the three steps.
+struct DemoMetrics {
+  nlohmann::json inject, compare, xray;
+};
+
+// DIR/metrics.json: the headline figures of the three steps.
+nlohmann::json demoSummary(const DemoMetrics& m, double wallS) {
+  nlohmann::json metrics;
+  metrics["inject"] = pick(m.inject, {"volume_injected_ml", "simulated_time_s", "wall_time_s", "real_time_factor",
+                                      "max_tip_pressure_pa", "mean_spreading_distance_mm"});
+  metrics["compare"] = pick(m.compare, {"error_mm", "hausdorff95_mm", "dice", "jaccard", "cement_volume_ml"});
+  metrics["xray"] = pick(m.xray, {"final_time_s", "final_projected_area_mm2", "final_reference_projected_area_mm2"});
+  const nlohmann::json& finalFrame = m.xray.at("final_frame");
+  metrics["xray"]["final_frame_dice"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("dice");
+  metrics["xray"]["final_frame_iou"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("iou");
+  metrics["post_scan_made_by"] = "the model itself (pipeline check, not a validation)";
+  metrics["wall_time_s"] = wallS;
+  metrics["provenance"] = cementsph::provenance::toJson();
+  return metrics;
+}
+
+// The three subcommands in turn; false (with *rc their status) when one failed outright. A status 3 (a picture
+// failed, its numbers are written) goes on and is reported at the end in *status.
+bool runFoamSteps(const DemoOptions& o, const fs::path& phantom, const nlohmann::json& plan, DemoMetrics& m,
+                  int* rc, int* status) {
+  auto step = [&](int code) {
+    *rc = code;
+    if (code == 3) *status = 3;
+    return code == 0 || code == 3;
+  };
+  const fs::path out(o.out);
+  std::cerr << "demo 1/4: injecting " << plan.at("volume_ml").get<double>() << " ml at "
+            << plan.at("flow_rate_ml_per_s").get<double>() << " ml/s, " << plan.at("viscosity_pa_s").get<double>()
+            << " Pa.s into the foam phantom (paper's plan), with a simulated CT every second\n";
+  cementsph::app::InjectRequest inject;
+  inject.ct = (phantom / "pre.nrrd").string();
+  inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
+  inject.overrides = {"simulated_ct_snapshots=true"};
+  for (const std::string& override : planOverrides(plan)) inject.overrides.push_back(override);
+  inject.threads = o.threads;
+  inject.out = (out / "inject").string();
+  if (!step(cementsph::app::runInject(inject, &m.inject))) return false;
+
+  std::cerr << "demo 2/4: comparing with the phantom's post-injection CT\n";
+  cementsph::app::CompareRequest compare;
+  compare.pre = (phantom / "pre.nrrd").string();
+  compare.post = (phantom / "post.nrrd").string();
+  compare.simulated = (out / "inject" / "simulated_ct.nrrd").string();
+  compare.injection = plan.at("tip_mm").get<std::vector<double>>();
+  compare.out = (out / "compare").string();
+  if (!step(cementsph::app::runCompare(compare, &m.compare))) return false;
+
+  // The experiment's X-ray sequence has two frames: the pre-injection CT (t = 0) and the registered
+  // post-injection CT, taken as the frame at the end of the injection (the simulation's last frame).
+  std::cerr << "demo 3/4: X-ray sequences (Fig. 12): the simulation's frames and the post-injection CT's\n";
+  cementsph::app::XrayRequest xrayRequest;
+  xrayRequest.sequence = {(out / "inject").string()};
+  xrayRequest.reference = {(phantom / "pre.nrrd").string(), (out / "compare" / "registered_post.nrrd").string()};
+  xrayRequest.referenceTimesS = {0.0, m.inject.at("simulated_time_s").get<double>()};
+  xrayRequest.drr.threads = o.threads;
+  xrayRequest.out = (out / "xray").string();
+  return step(cementsph::app::runXray(xrayRequest, &m.xray));
 }
 
 int runDemo(const DemoOptions& o) {
@@ -102,56 +185,10 @@ int runDemo(const DemoOptions& o) {
   std::ifstream truthFile(truthPath);
   if (!truthFile) throw std::runtime_error(truthPath.string() + ": cannot read the bundled phantom (use --data-dir)");
   const nlohmann::json truth = nlohmann::json::parse(truthFile);
-  const nlohmann::json& plan = truth.at("injection");
   const fs::path out(o.out);
-
-  // Exit status 3 from a step means a picture failed but its numbers are written: go on, report it at the end.
-  int status = 0;
-  auto step = [&status](int rc) {
-    if (rc == 3) status = 3;
-    return rc == 0 || rc == 3;
-  };
-
-  std::cerr << "demo 1/4: injecting " << plan.at("volume_ml").get<double>() << " ml at "
-            << plan.at("flow_rate_ml_per_s").get<double>() << " ml/s, " << plan.at("viscosity_pa_s").get<double>()
-            << " Pa.s into the foam phantom (paper's plan), with a simulated CT every second\n";
-  cementsph::app::InjectRequest inject;
-  inject.ct = (phantom / "pre.nrrd").string();
-  inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
-  inject.overrides = {"simulated_ct_snapshots=true", "tip_mm=" + plan.at("tip_mm").dump(),
-                      "volume_ml=" + exactNumber(plan.at("volume_ml").get<double>()),
-                      "flow_rate_ml_per_s=" + exactNumber(plan.at("flow_rate_ml_per_s").get<double>()),
-                      "viscosity_pa_s=" + exactNumber(plan.at("viscosity_pa_s").get<double>())};
-  inject.threads = o.threads;
-  inject.out = (out / "inject").string();
-  int rc = cementsph::app::runInject(inject);
-  if (!step(rc)) return rc;
-  const nlohmann::json injectMetrics = readJson(out / "inject" / "metrics.json");
-
-  std::cerr << "demo 2/4: comparing with the phantom's post-injection CT\n";
-  cementsph::app::CompareRequest compare;
-  compare.pre = (phantom / "pre.nrrd").string();
-  compare.post = (phantom / "post.nrrd").string();
-  compare.simulated = (out / "inject" / "simulated_ct.nrrd").string();
-  compare.injection = plan.at("tip_mm").get<std::vector<double>>();
-  compare.out = (out / "compare").string();
-  rc = cementsph::app::runCompare(compare);
-  if (!step(rc)) return rc;
-  const nlohmann::json compareMetrics = readJson(out / "compare" / "metrics.json");
-
-  // The experiment's X-ray sequence has two frames: the pre-injection CT (t = 0) and the registered
-  // post-injection CT, taken as the frame at the end of the injection (the simulation's last frame).
-  std::cerr << "demo 3/4: X-ray sequences (Fig. 12): the simulation's frames and the post-injection CT's\n";
-  const double endS = injectMetrics.at("simulated_time_s").get<double>();
-  cementsph::app::XrayRequest xrayRequest;
-  xrayRequest.sequence = {(out / "inject").string()};
-  xrayRequest.reference = {(phantom / "pre.nrrd").string(), (out / "compare" / "registered_post.nrrd").string()};
-  xrayRequest.referenceTimesS = {0.0, endS};
-  xrayRequest.drr.threads = o.threads;
-  xrayRequest.out = (out / "xray").string();
-  rc = cementsph::app::runXray(xrayRequest);
-  if (!step(rc)) return rc;
-  const nlohmann::json xray = readJson(out / "xray" / "metrics.json");
+  DemoMetrics m;
+  int rc = 0, status = 0;
+  if (!runFoamSteps(o, phantom, truth.at("injection"), m, &rc, &status)) return rc;
 
   std::cerr << "demo 4/4: summary\n";
   for (const char* picture : {"tip_pressure.png", "injection_pressure.png"}) {
@@ -162,24 +199,8 @@ int runDemo(const DemoOptions& o) {
       status = 3;
     }
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  nlohmann::json metrics;
-  auto pick = [](const nlohmann::json& from, std::initializer_list<const char*> keys) {
-    nlohmann::json j;
-    for (const char* k : keys) j[k] = from.contains(k) ? from[k] : nlohmann::json(nullptr);
-    return j;
-  };
-  metrics["inject"] = pick(injectMetrics, {"volume_injected_ml", "simulated_time_s", "wall_time_s", "real_time_factor",
-                                           "max_tip_pressure_pa", "mean_spreading_distance_mm"});
-  metrics["compare"] = pick(compareMetrics, {"error_mm", "hausdorff95_mm", "dice", "jaccard", "cement_volume_ml"});
-  metrics["xray"] = pick(xray, {"final_time_s", "final_projected_area_mm2", "final_reference_projected_area_mm2"});
-  const nlohmann::json& finalFrame = xray.at("final_frame");
-  metrics["xray"]["final_frame_dice"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("dice");
-  metrics["xray"]["final_frame_iou"] = finalFrame.is_null() ? nlohmann::json(nullptr) : finalFrame.at("iou");
-  metrics["post_scan_made_by"] = "the model itself (pipeline check, not a validation)";
-  metrics["wall_time_s"] = wall;
-  metrics["provenance"] = cementsph::provenance::toJson();
-  cementsph::imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
+  const double wall = secondsSince(start);
+  cementsph::imaging::writeTextAtomically((out / "metrics.json").string(), demoSummary(m, wall).dump(2) + "\n");
   std::cout << "demo done in " << wall << " s: " << (out / "metrics.json").string() << ", "
             << (out / "compare" / "surfaces.png").string() << ", " << (out / "compare" / "slices.png").string()
             << ", " << (out / "xray" / "xray_frames.png").string() << ", " << (out / "tip_pressure.png").string()

@@ -153,11 +153,12 @@ json runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
 
 } // namespace
 
-int runInject(const InjectRequest& a) {
+int runInject(const InjectRequest& a, json* metrics) {
   scene::SceneConfig scene = scene::loadSceneFile(a.scene, a.overrides);
   if (!a.labels.empty()) scene.labelsPath = a.labels;
   if (a.threads > 0) omp_set_num_threads(a.threads);
   const json m = runFilter(a, scene);
+  if (metrics) *metrics = m;
   printSummary(m, a.out);
   if (a.noPictures) return 0;
   const fs::path out(a.out);

@@ -289,7 +289,7 @@ cementsph::app::CommandRunner setupXray(CLI::App& sub) {
 
 namespace cementsph::app {
 
-int runXray(const XrayRequest& a) {
+int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
   const auto start = std::chrono::steady_clock::now();
   checkRequest(a);
   XrayRun run;
@@ -335,6 +335,7 @@ int runXray(const XrayRequest& a) {
   staged.publish({"sequence_drr_####.nrrd", "sequence_drr_####.png", "reference_drr_####.nrrd",
                   "reference_drr_####.png"});
   record.totalSeconds = secondsSince(start);
+  if (metricsOut) *metricsOut = std::move(metrics);
   printSummary(a, run, record);
   return pictures.status();
 }
