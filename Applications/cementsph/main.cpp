@@ -116,6 +116,91 @@ protected:
 // One line: the message with its line breaks turned into spaces (library messages can hold several).
 std::string singleLine(const std::string& text) { return cementsph::imaging::oneLine(text); }
 
+// Adds every registered command as a subcommand of `app` (sorted by name) and returns their runners. --quiet on
+// every subcommand: a command with its own (inject, phantom, plan: no progress line) keeps it; on the others it
+// sets *quiet, which silences what they print but errors (main prints those itself, after the run).
+std::map<CLI::App*, cementsph::app::CommandRunner> addSubcommands(CLI::App& app, bool* quiet) {
+  using namespace cementsph::app;
+  auto& commands = CommandRegistry::commands();
+  std::sort(commands.begin(), commands.end(), [](const Command& a, const Command& b) { return a.name < b.name; });
+  std::map<CLI::App*, CommandRunner> runners;
+  for (const Command& command : commands) {
+    CLI::App* sub = app.add_subcommand(command.name, command.summary);
+    runners[sub] = command.setup(*sub);
+    capThreadsOption(*sub);
+    requireFiniteNumbers(*sub);
+    if (!sub->get_option_no_throw("--quiet"))
+      sub->add_flag("--quiet", *quiet, "Print nothing but errors (the files are written as usual)");
+  }
+  return runners;
+}
+
+// A parse error as one line naming the option, and where the options are listed; not CLI11's own exit codes
+// (105-114).
+int reportParseError(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  std::string name = "cementsph";
+  for (const CLI::App* sub : app.get_subcommands()) name += " " + sub->get_name();
+  if (!app.get_subcommands().empty()) {
+    std::cerr << name << ": error: " << singleLine(e.what()) << " (see " << name << " --help)\n";
+    return kBadInput;
+  }
+  // No subcommand recognised: name the word that is not one, and list those there are.
+  std::string word, names;
+  for (int i = 1; i < argc && word.empty(); ++i)
+    if (argv[i][0] != '-') word = argv[i];
+  for (const auto& command : cementsph::app::CommandRegistry::commands())
+    names += (names.empty() ? "" : ", ") + command.name;
+  if (!word.empty())
+    std::cerr << "cementsph: error: '" << singleLine(word).substr(0, 60) << "' is not a subcommand (the subcommands: "
+              << names << "; see cementsph --help)\n";
+  else
+    std::cerr << "cementsph: error: a subcommand is required (the subcommands: " << names << "; see cementsph --help)\n";
+  return kBadInput;
+}
+
+// Runs one command: its exit status, or for what it threw, one line on stderr (the command's name first) and the
+// status of the failure's kind. --quiet: the command's own output is silenced while it runs; the error line
+// comes after, to the real stderr.
+int runCommand(const std::string& name, const cementsph::app::CommandRunner& run, bool quiet) {
+  const std::string prefix = "cementsph " + name + ": error: ";
+  std::streambuf* const out = std::cout.rdbuf();
+  std::streambuf* const err = std::cerr.rdbuf();
+  NullBuffer nothing; // outlives `restore`
+  struct Restore {
+    std::streambuf *out, *err;
+    void now() const {
+      std::cout.rdbuf(out);
+      std::cerr.rdbuf(err);
+    }
+    ~Restore() { now(); }
+  } restore{out, err};
+  if (quiet) {
+    std::cout.rdbuf(&nothing);
+    std::cerr.rdbuf(&nothing);
+  }
+  auto fail = [&](int status, const std::string& message) {
+    restore.now();
+    std::cerr << prefix << message << "\n";
+    return status;
+  };
+  try {
+    return run();
+  } catch (const cementsph::parallel::FarmStopped&) { // a worker rank: rank 0 says why
+    restore.now();
+    return kBadInput;
+  } catch (const CLI::ParseError& e) { // a subcommand run by another one (demo: inject, compare)
+    return fail(kBadInput, singleLine(e.what()));
+  } catch (const std::bad_alloc&) {
+    return fail(kFailedRun, "out of memory (a smaller volume, region or particle count needs less)");
+  } catch (const cementsph::sph::SimulationError& e) { // unstable, or the cement has nowhere to go
+    return fail(kFailedRun, singleLine(e.what()));
+  } catch (const cementsph::imaging::OutputError& e) {
+    return fail(kFailedRun, singleLine(e.what()));
+  } catch (const std::exception& e) {
+    return fail(kBadInput, singleLine(e.what()));
+  }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -134,26 +219,10 @@ int main(int argc, char** argv) {
                "cementsph"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "cementsph 0.1.0");
-  bool verbose = false;
+  bool verbose = false, quiet = false;
   app.add_flag("--verbose", verbose, "Let GDCM, ITK and VTK print their own warnings and errors to stderr");
   app.fallthrough(); // --verbose also after the subcommand's name
-
-  auto& commands = CommandRegistry::commands();
-  std::sort(commands.begin(), commands.end(),
-            [](const Command& a, const Command& b) { return a.name < b.name; });
-  std::map<CLI::App*, CommandRunner> runners;
-  // --quiet on every subcommand: a command with its own (inject, phantom, plan: no progress line) keeps it;
-  // on the others it silences what they print but errors (main prints those itself, after the run).
-  bool quiet = false;
-  for (const Command& command : commands) {
-    CLI::App* sub = app.add_subcommand(command.name, command.summary);
-    runners[sub] = command.setup(*sub);
-    capThreadsOption(*sub);
-    requireFiniteNumbers(*sub);
-    if (!sub->get_option_no_throw("--quiet"))
-      sub->add_flag("--quiet", quiet, "Print nothing but errors (the files are written as usual)");
-  }
-
+  const std::map<CLI::App*, CommandRunner> runners = addSubcommands(app, &quiet);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -163,25 +232,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    // One line naming the option, and where the options are listed; not CLI11's own exit codes (105-114).
-    std::string name = "cementsph";
-    for (const CLI::App* sub : app.get_subcommands()) name += " " + sub->get_name();
-    if (app.get_subcommands().empty()) {
-      // No subcommand recognised: name the word that is not one, and list those there are.
-      std::string word, names;
-      for (int i = 1; i < argc && word.empty(); ++i)
-        if (argv[i][0] != '-') word = argv[i];
-      for (const Command& command : commands) names += (names.empty() ? "" : ", ") + command.name;
-      if (!word.empty())
-        std::cerr << "cementsph: error: '" << singleLine(word).substr(0, 60) << "' is not a subcommand (the subcommands: "
-                  << names << "; see cementsph --help)\n";
-      else
-        std::cerr << "cementsph: error: a subcommand is required (the subcommands: " << names
-                  << "; see cementsph --help)\n";
-      return kBadInput;
-    }
-    std::cerr << name << ": error: " << singleLine(e.what()) << " (see " << name << " --help)\n";
-    return kBadInput;
+    return reportParseError(app, e, argc, argv);
   }
   cementsph::imaging::setLibraryMessagesVerbose(verbose);
 #ifdef CEMENTSPH_HAS_RENDERING
@@ -193,55 +244,11 @@ int main(int argc, char** argv) {
     return kBadInput;
   }
 #endif
-
-  std::map<CLI::App*, bool> overRanks;
-  for (const Command& command : commands) overRanks[app.get_subcommand(command.name)] = command.spreadsOverRanks;
-  for (auto& [sub, run] : runners) {
+  for (const Command& command : CommandRegistry::commands()) {
+    CLI::App* sub = app.get_subcommand(command.name);
     if (!sub->parsed()) continue;
-    if (quietRank && !overRanks[sub]) return 0; // rank 0 runs this command alone
-    const std::string prefix = "cementsph " + sub->get_name() + ": error: ";
-    // --quiet: the command's own output is silenced while it runs; main's error line comes after.
-    std::streambuf* const out = std::cout.rdbuf();
-    std::streambuf* const err = std::cerr.rdbuf();
-    NullBuffer nothing; // outlives `restore`
-    struct Restore {
-      std::streambuf *out, *err;
-      ~Restore() {
-        std::cout.rdbuf(out);
-        std::cerr.rdbuf(err);
-      }
-    } restore{out, err};
-    if (quiet) {
-      std::cout.rdbuf(&nothing);
-      std::cerr.rdbuf(&nothing);
-    }
-    try {
-      const int status = run();
-      return status;
-    } catch (const cementsph::parallel::FarmStopped&) { // a worker rank: rank 0 says why
-      std::cout.rdbuf(out), std::cerr.rdbuf(err);
-      return kBadInput;
-    } catch (const CLI::ParseError& e) { // a subcommand run by another one (demo: inject, compare)
-      std::cout.rdbuf(out), std::cerr.rdbuf(err);
-      std::cerr << prefix << singleLine(e.what()) << "\n";
-      return kBadInput;
-    } catch (const std::bad_alloc&) {
-      std::cout.rdbuf(out), std::cerr.rdbuf(err);
-      std::cerr << prefix << "out of memory (a smaller volume, region or particle count needs less)\n";
-      return kFailedRun;
-    } catch (const cementsph::sph::SimulationError& e) { // unstable, or the cement has nowhere to go
-      std::cout.rdbuf(out), std::cerr.rdbuf(err);
-      std::cerr << prefix << singleLine(e.what()) << "\n";
-      return kFailedRun;
-    } catch (const cementsph::imaging::OutputError& e) {
-      std::cout.rdbuf(out), std::cerr.rdbuf(err);
-      std::cerr << prefix << singleLine(e.what()) << "\n";
-      return kFailedRun;
-    } catch (const std::exception& e) {
-      std::cout.rdbuf(out), std::cerr.rdbuf(err);
-      std::cerr << prefix << singleLine(e.what()) << "\n";
-      return kBadInput;
-    }
+    if (quietRank && !command.spreadsOverRanks) return 0; // rank 0 runs this command alone
+    return runCommand(command.name, runners.at(sub), quiet);
   }
   return kBadInput;
 }
