@@ -58,25 +58,10 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
     const vtkSmartPointer<vtkImageData> image = cementsph::drr::projectVolume(hu, geometry, a->drr.threads);
     const double drrSeconds = seconds(t);
 
-    // Write: directory, numbers, picture. If a write fails, what this run made goes again (the numbers,
-    // and the directory if it created it): no half output.
+    // Write: directory, numbers, picture; a failed write leaves no half output.
     t = std::chrono::steady_clock::now();
-    const fs::path out(a->out);
-    std::error_code ec;
-    const bool madeDirectory = !fs::exists(out, ec);
-    fs::create_directories(out, ec);
-    if (ec) throw std::runtime_error(a->out + ": cannot create output directory: " + ec.message());
-    const std::string nrrd = (out / "drr.nrrd").string(), png = (out / "drr.png").string();
-    bool wroteNrrd = false;
-    try {
-      writeVolume(imageFromVtk(image), nrrd, /*compress=*/false); // deflate would cost ~0.04 s of a 0.5 s run
-      wroteNrrd = true;
-      cementsph::app::writeDrrPng(image, png);
-    } catch (...) {
-      if (wroteNrrd) fs::remove(nrrd, ec);
-      if (madeDirectory) fs::remove(out, ec); // only if empty
-      throw;
-    }
+    cementsph::app::writeDrrFiles(image, a->out);
+    const std::string nrrd = (fs::path(a->out) / "drr.nrrd").string(), png = (fs::path(a->out) / "drr.png").string();
 
     double range[2];
     image->GetPointData()->GetScalars()->GetRange(range, 0);

@@ -1,6 +1,8 @@
 #include "DrrOptions.h"
 
 #include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/imaging/ItkVtkBridge.h"
+#include "cementsph/imaging/VolumeIO.h"
 
 #include <vtkDataArray.h>
 #include <vtkFloatArray.h>
@@ -10,6 +12,7 @@
 #include <vtkPNGWriter.h>
 #include <vtkPointData.h>
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace cementsph::app {
@@ -100,6 +103,26 @@ void writeDrrPng(vtkImageData* drr, const std::string& path, double windowMax) {
     writer->Write();
     if (writer->GetErrorCode() != 0) throw std::runtime_error("PNG writer failed");
   });
+}
+
+void writeDrrFiles(vtkImageData* drr, const std::string& outDir) {
+  namespace fs = std::filesystem;
+  const fs::path out(outDir);
+  std::error_code ec;
+  const bool madeDirectory = !fs::exists(out, ec);
+  fs::create_directories(out, ec);
+  if (ec) throw std::runtime_error(outDir + ": cannot create output directory: " + ec.message());
+  const std::string nrrd = (out / "drr.nrrd").string(), png = (out / "drr.png").string();
+  bool wroteNrrd = false;
+  try {
+    imaging::writeVolume(imaging::imageFromVtk(drr), nrrd, /*compress=*/false);
+    wroteNrrd = true;
+    writeDrrPng(drr, png);
+  } catch (...) {
+    if (wroteNrrd) fs::remove(nrrd, ec);
+    if (madeDirectory) fs::remove(out, ec); // only if empty
+    throw;
+  }
 }
 
 } // namespace cementsph::app
