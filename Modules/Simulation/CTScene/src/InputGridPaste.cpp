@@ -25,6 +25,32 @@ void requireWhole(const imaging::ImageType* image, const char* what) {
     throw std::invalid_argument(std::string("paste-back: the ") + what + " image is only partly in memory");
 }
 
+// True when the direction matrix is exactly the identity (not merely within isAxisAligned's 1e-6): then ITK's
+// index-to-point matrix is exactly diagonal, its per-voxel transform adds exact zeros for the other axes, and
+// coordinate a of a voxel centre depends on index a alone, so one table per axis gives bit for bit what a
+// transform per voxel gives. This is what lets a whole-scan region cost a few passes over memory instead of
+// matrix products and roundings per voxel.
+bool separable(const imaging::ImageType* image) {
+  const auto& d = image->GetDirection();
+  for (unsigned r = 0; r < 3; ++r)
+    for (unsigned c = 0; c < 3; ++c)
+      if (d[r][c] != (r == c ? 1.0 : 0.0)) return false;
+  return true;
+}
+
+// Coordinate a [mm] of the centre of each index start .. start + count - 1 along axis a, by ITK's own transform.
+std::vector<double> centresAlong(const imaging::ImageType* image, unsigned a, long start, long count) {
+  std::vector<double> x(std::size_t(std::max(count, 0L)));
+  imaging::ImageType::IndexType index = image->GetLargestPossibleRegion().GetIndex();
+  for (long i = 0; i < count; ++i) {
+    index[a] = start + i;
+    imaging::ImageType::PointType p;
+    image->TransformIndexToPhysicalPoint(index, p);
+    x[std::size_t(i)] = p[a];
+  }
+  return x;
+}
+
 } // namespace
 
 imaging::ImageType::Pointer alignedBackgroundOn(const imaging::ImageType* input, const imaging::ImageType* grid) {
@@ -42,6 +68,40 @@ imaging::ImageType::Pointer alignedBackgroundOn(const imaging::ImageType* input,
   out->SetRegions(grid->GetLargestPossibleRegion());
   out->CopyInformation(grid);
   out->Allocate();
+  if (separable(input) && separable(grid)) {
+    // Per axis, the input index of each grid centre, or -1 outside the input; then rows copied. The centres
+    // coincide with input centres (the grid is a region of the aligned CT), so the continuous index is an
+    // integer up to round-off and rounding it is what TransformPhysicalPointToIndex does; a grid that does
+    // not coincide (to 1e-3 voxel) takes the general path below.
+    const auto gridRegion = grid->GetLargestPossibleRegion(), inRegion = input->GetLargestPossibleRegion();
+    std::array<std::vector<long>, 3> at;
+    bool coincide = true;
+    for (unsigned a = 0; a < 3 && coincide; ++a)
+      for (const double x : centresAlong(grid, a, long(gridRegion.GetIndex()[a]), long(gridRegion.GetSize()[a]))) {
+        const double c = (x - input->GetOrigin()[a]) / input->GetSpacing()[a];
+        const double r = std::round(c);
+        coincide = coincide && std::abs(c - r) <= 1e-3;
+        const long i = long(r) - long(inRegion.GetIndex()[a]);
+        at[a].push_back(i >= 0 && i < long(inRegion.GetSize()[a]) ? i : -1);
+      }
+    if (coincide) {
+      const float* in = input->GetBufferPointer();
+      float* dst = out->GetBufferPointer();
+      const std::size_t nx = at[0].size(), ny = at[1].size(), nz = at[2].size();
+      const std::size_t sx = inRegion.GetSize()[0], sy = inRegion.GetSize()[1];
+      for (std::size_t k = 0; k < nz; ++k)
+        for (std::size_t j = 0; j < ny; ++j) {
+          float* row = dst + nx * (j + ny * k);
+          if (at[1][j] < 0 || at[2][k] < 0) {
+            std::fill(row, row + nx, kOutsideScanHu);
+            continue;
+          }
+          const float* from = in + sx * (std::size_t(at[1][j]) + sy * std::size_t(at[2][k]));
+          for (std::size_t i = 0; i < nx; ++i) row[i] = at[0][i] < 0 ? kOutsideScanHu : from[at[0][i]];
+        }
+      return out;
+    }
+  }
   itk::ImageRegionIteratorWithIndex<imaging::ImageType> it(out, out->GetLargestPossibleRegion());
   for (; !it.IsAtEnd(); ++it) {
     imaging::ImageType::PointType p;
@@ -114,18 +174,29 @@ imaging::ImageType::Pointer pasteOntoInputGrid(const imaging::ImageType* input, 
     if (lo[a] > hi[a]) return out; // the simulated box misses the input
   }
 
+  // u: the input voxel centre in simulated voxel units. An exactly diagonal input (every axial CT) has it per
+  // axis from a table, the same numbers as the per-voxel transform (see separable()).
+  const bool perAxis = separable(input);
+  std::array<std::vector<double>, 3> along;
+  if (perAxis)
+    for (unsigned a = 0; a < 3; ++a) {
+      along[a] = centresAlong(input, a, lo[a], hi[a] - lo[a] + 1);
+      for (double& x : along[a]) x = (x - o[a]) / h[a];
+    }
   imaging::ImageType::IndexType index;
   for (index[2] = lo[2]; index[2] <= hi[2]; ++index[2])
     for (index[1] = lo[1]; index[1] <= hi[1]; ++index[1])
       for (index[0] = lo[0]; index[0] <= hi[0]; ++index[0]) {
-        imaging::ImageType::PointType p;
-        input->TransformIndexToPhysicalPoint(index, p);
         std::array<double, 3> u{};
-        bool inside = true;
-        for (unsigned a = 0; a < 3 && inside; ++a) {
-          u[a] = (p[a] - o[a]) / h[a];
-          inside = u[a] >= -0.5 && u[a] <= double(n[a]) - 0.5;
+        if (perAxis) {
+          for (unsigned a = 0; a < 3; ++a) u[a] = along[a][std::size_t(index[a] - lo[a])];
+        } else {
+          imaging::ImageType::PointType p;
+          input->TransformIndexToPhysicalPoint(index, p);
+          for (unsigned a = 0; a < 3; ++a) u[a] = (p[a] - o[a]) / h[a];
         }
+        bool inside = true;
+        for (unsigned a = 0; a < 3 && inside; ++a) inside = u[a] >= -0.5 && u[a] <= double(n[a]) - 0.5;
         if (!inside) continue;
         const std::size_t target = std::size_t((index[0] - inStart[0]) +
                                                inSize[0] * ((index[1] - inStart[1]) + inSize[1] * (index[2] - inStart[2])));
