@@ -12,6 +12,8 @@
 #include <vtkPNGWriter.h>
 #include <vtkPointData.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -122,6 +124,28 @@ void writeDrrFiles(vtkImageData* drr, const std::string& outDir) {
     if (wroteNrrd) fs::remove(nrrd, ec);
     if (madeDirectory) fs::remove(out, ec); // only if empty
     throw;
+  }
+}
+
+double drrWindow(const drr::XraySequence& sequence) {
+  double top = 0.0;
+  for (const auto& f : sequence.frames()) {
+    double range[2];
+    f.drr->GetPointData()->GetScalars()->GetRange(range, 0);
+    top = std::max(top, range[1]);
+  }
+  return top;
+}
+
+void writeDrrFrames(const drr::XraySequence& sequence, const char* prefix, const std::string& dir) {
+  const double window = drrWindow(sequence);
+  for (std::size_t k = 0; k < sequence.frames().size(); ++k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "%s_drr_%04zu", prefix, k);
+    const auto& frame = sequence.frames()[k];
+    const std::filesystem::path base = std::filesystem::path(dir) / name;
+    imaging::writeVolume(imaging::imageFromVtk(frame.drr), base.string() + ".nrrd");
+    writeDrrPng(frame.drr, base.string() + ".png", window);
   }
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "cementsph/drr/DRRGeometry.h"
+#include "cementsph/drr/XraySequence.h"
 #include "cementsph/imaging/ImageTypes.h"
 
 #include <vtkSmartPointer.h>
@@ -52,5 +53,9 @@ void writeDrrPng(vtkImageData* drr, const std::string& path, double windowMax = 
 // ~0.04 s of a 0.5 s run) and out/drr.png. If a write fails, what this call made goes again (the numbers, and
 // the folder if it created it): no half output.
 void writeDrrFiles(vtkImageData* drr, const std::string& out);
+// The largest DRR value over a sequence's frames: one window for all its pictures.
+double drrWindow(const drr::XraySequence& sequence);
+// `cementsph xray`'s frames: DIR/PREFIX_drr_NNNN.nrrd (float DRR) and .png, one window for the whole sequence.
+void writeDrrFrames(const drr::XraySequence& sequence, const char* prefix, const std::string& dir);
 
 } // namespace cementsph::app

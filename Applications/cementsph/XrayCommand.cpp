@@ -83,16 +83,6 @@ drr::XraySequence project(const drr::XrayFrameList& frames, const drr::XraySeque
   return s;
 }
 
-double windowOf(const drr::XraySequence& s) {
-  double top = 0.0;
-  for (const auto& f : s.frames()) {
-    double range[2];
-    f.drr->GetPointData()->GetScalars()->GetRange(range, 0);
-    top = std::max(top, range[1]);
-  }
-  return top;
-}
-
 std::string timeLabel(double t) {
   std::ostringstream s;
   s << "t = " << std::fixed << std::setprecision(1) << (std::abs(t) < 0.05 ? 0.0 : t) << " s";
@@ -157,25 +147,12 @@ void computeSequences(const XrayRequest& a, XrayRun& run) {
         *run.sequence, *run.reference, a.toleranceGiven ? std::optional<double>(a.toleranceS) : std::nullopt);
 }
 
-// DIR/PREFIX_drr_NNNN.nrrd (float DRR) and .png, one window for the whole sequence.
-void writeFrames(const drr::XraySequence& s, const char* prefix, const fs::path& dir) {
-  const double window = windowOf(s);
-  for (std::size_t k = 0; k < s.frames().size(); ++k) {
-    char name[64];
-    std::snprintf(name, sizeof name, "%s_drr_%04zu", prefix, k);
-    const auto& frame = s.frames()[k];
-    cementsph::imaging::writeVolume(cementsph::imaging::imageFromVtk(frame.drr),
-                                    (dir / (std::string(name) + ".nrrd")).string());
-    cementsph::app::writeDrrPng(frame.drr, (dir / (std::string(name) + ".png")).string(), window);
-  }
-}
-
 // xray_frames.png: the sequence's frames (at most maxColumns) above the reference frames they matched.
 void drawFrames(const XrayRun& run, int maxColumns, const fs::path& png) {
   const drr::XraySequence& sequence = *run.sequence;
   std::vector<std::string> labels;
-  rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, windowOf(sequence)};
-  rendering::XrayFramesRow refRow{"reference", {}, kReferenceRgb, run.reference ? windowOf(*run.reference) : 0.0};
+  rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, cementsph::app::drrWindow(sequence)};
+  rendering::XrayFramesRow refRow{"reference", {}, kReferenceRgb, run.reference ? cementsph::app::drrWindow(*run.reference) : 0.0};
   for (std::size_t k : pictureColumns(sequence.frames().size(), maxColumns)) {
     const auto& f = sequence.frames()[k];
     labels.push_back(timeLabel(f.timeS));
@@ -310,8 +287,8 @@ int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
   auto t = std::chrono::steady_clock::now();
   imaging::StagedFolder staged(a.out);
   const fs::path dir = staged.path();
-  writeFrames(*run.sequence, "sequence", dir);
-  if (run.reference) writeFrames(*run.reference, "reference", dir);
+  writeDrrFrames(*run.sequence, "sequence", dir);
+  if (run.reference) writeDrrFrames(*run.reference, "reference", dir);
   imaging::writeTextAtomically((dir / "sequence.csv").string(),
                                drr::xraySequenceCsv(*run.sequence, record.reference, record.comparison));
   record.writeSeconds = secondsSince(t);
