@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -25,16 +26,17 @@ void requireWhole(const imaging::ImageType* image, const char* what) {
     throw std::invalid_argument(std::string("paste-back: the ") + what + " image is only partly in memory");
 }
 
-// True when the direction matrix is exactly the identity (not merely within isAxisAligned's 1e-6): then ITK's
-// index-to-point matrix is exactly diagonal, its per-voxel transform adds exact zeros for the other axes, and
-// coordinate a of a voxel centre depends on index a alone, so one table per axis gives bit for bit what a
-// transform per voxel gives. This is what lets a whole-scan region cost a few passes over memory instead of
-// matrix products and roundings per voxel.
+// True when the direction matrix has exact zeros off its diagonal (an axial CT; its diagonal need not be
+// exactly 1: a reader that normalises 0.47 mm space directions gets 1 - 1 ulp). Then ITK's index-to-point
+// matrix is exactly diagonal, its per-voxel transform adds exact zeros for the other axes, and coordinate a
+// of a voxel centre depends on index a alone, so one table per axis gives bit for bit what a transform per
+// voxel gives. This is what lets a whole-scan region cost a few passes over memory instead of matrix
+// products and roundings per voxel.
 bool separable(const imaging::ImageType* image) {
   const auto& d = image->GetDirection();
   for (unsigned r = 0; r < 3; ++r)
     for (unsigned c = 0; c < 3; ++c)
-      if (d[r][c] != (r == c ? 1.0 : 0.0)) return false;
+      if (r != c && d[r][c] != 0.0) return false;
   return true;
 }
 
@@ -68,7 +70,7 @@ imaging::ImageType::Pointer alignedBackgroundOn(const imaging::ImageType* input,
   out->SetRegions(grid->GetLargestPossibleRegion());
   out->CopyInformation(grid);
   out->Allocate();
-  if (separable(input) && separable(grid)) {
+  if (isAxisAligned(input) && separable(input) && separable(grid)) {
     // Per axis, the input index of each grid centre, or -1 outside the input; then rows copied. The centres
     // coincide with input centres (the grid is a region of the aligned CT), so the continuous index is an
     // integer up to round-off and rounding it is what TransformPhysicalPointToIndex does; a grid that does
@@ -176,38 +178,54 @@ imaging::ImageType::Pointer pasteOntoInputGrid(const imaging::ImageType* input, 
 
   // u: the input voxel centre in simulated voxel units. An exactly diagonal input (every axial CT) has it per
   // axis from a table, the same numbers as the per-voxel transform (see separable()).
+  // Per axis, from u: inside the simulated box, the nearest simulated index, and whether u lies on it.
+  auto inBox = [&](unsigned a, double ua) { return ua >= -0.5 && ua <= double(n[a]) - 0.5; };
+  auto nearest = [&](unsigned a, double ua) { return std::clamp(std::lround(ua), 0L, n[a] - 1); };
+  auto onIt = [](double ua, long na) { return std::abs(ua - double(na)) <= 1e-6; };
   const bool perAxis = separable(input);
   std::array<std::vector<double>, 3> along;
+  std::array<std::vector<long>, 3> nearAlong;
+  std::array<std::vector<std::uint8_t>, 3> insideAlong, centreAlong;
   if (perAxis)
     for (unsigned a = 0; a < 3; ++a) {
       along[a] = centresAlong(input, a, lo[a], hi[a] - lo[a] + 1);
-      for (double& x : along[a]) x = (x - o[a]) / h[a];
+      for (double& x : along[a]) {
+        x = (x - o[a]) / h[a];
+        insideAlong[a].push_back(inBox(a, x));
+        nearAlong[a].push_back(nearest(a, x));
+        centreAlong[a].push_back(onIt(x, nearAlong[a].back()));
+      }
     }
   imaging::ImageType::IndexType index;
   for (index[2] = lo[2]; index[2] <= hi[2]; ++index[2])
     for (index[1] = lo[1]; index[1] <= hi[1]; ++index[1])
       for (index[0] = lo[0]; index[0] <= hi[0]; ++index[0]) {
         std::array<double, 3> u{};
+        std::array<long, 3> near{};
+        bool inside = true, onCentre = true;
         if (perAxis) {
-          for (unsigned a = 0; a < 3; ++a) u[a] = along[a][std::size_t(index[a] - lo[a])];
+          for (unsigned a = 0; a < 3; ++a) {
+            const std::size_t t = std::size_t(index[a] - lo[a]);
+            u[a] = along[a][t];
+            near[a] = nearAlong[a][t];
+            inside = inside && insideAlong[a][t];
+            onCentre = onCentre && centreAlong[a][t];
+          }
         } else {
           imaging::ImageType::PointType p;
           input->TransformIndexToPhysicalPoint(index, p);
-          for (unsigned a = 0; a < 3; ++a) u[a] = (p[a] - o[a]) / h[a];
+          for (unsigned a = 0; a < 3; ++a) {
+            u[a] = (p[a] - o[a]) / h[a];
+            inside = inside && inBox(a, u[a]);
+            near[a] = nearest(a, u[a]);
+            onCentre = onCentre && onIt(u[a], near[a]);
+          }
         }
-        bool inside = true;
-        for (unsigned a = 0; a < 3 && inside; ++a) inside = u[a] >= -0.5 && u[a] <= double(n[a]) - 0.5;
         if (!inside) continue;
         const std::size_t target = std::size_t((index[0] - inStart[0]) +
                                                inSize[0] * ((index[1] - inStart[1]) + inSize[1] * (index[2] - inStart[2])));
         if (target >= inCount) continue; // cannot happen (lo/hi are clipped); never write outside the buffer
         const double inHu = in[target];
-        std::array<long, 3> near{};
-        bool onCentre = true;
-        for (unsigned a = 0; a < 3; ++a) {
-          near[a] = std::clamp(std::lround(u[a]), 0L, n[a] - 1);
-          onCentre = onCentre && std::abs(u[a] - double(near[a])) <= 1e-6;
-        }
         if (onCentre) {
           // The same voxel: simulated + (input - background), which is the simulated HU itself wherever the
           // input equals the background (axial and reoriented CTs), with no round-off of a difference.
