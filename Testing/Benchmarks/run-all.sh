@@ -12,6 +12,9 @@
 #                  figures have no "before" column. See BENCHMARKS.md for how the quoted baseline was made.
 #   REPEATS=N      repetitions of each voxel run (default 3; QUICK: 1); medians are quoted
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
+#   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
+#                  whole-scan region against the 40 mm one), threads, sph, peers (DRR, registration);
+#                  default all. The tables then hold only those sections' figures
 #
 # Writes OUT_DIR/benchmarks.md (the dated tables, machine and load average) and OUT_DIR/runs.jsonl (every
 # run: wall and CPU time, peak memory, solver statistics) and prints the Markdown.
@@ -23,7 +26,7 @@ case "$BUILD" in /*) ;; *) BUILD=$ROOT/$BUILD ;; esac
 OUT=${1:-/tmp/cementsph-bench-$(date -u +%Y%m%dT%H%M%SZ)}
 mkdir -p "$OUT"
 export ROOT BUILD OUT
-export QUICK=${QUICK:-0} BASELINE=${BASELINE:-} REPEATS=${REPEATS:-} IMAGING_ARGS=${IMAGING_ARGS:---only=registration}
+export QUICK=${QUICK:-0} BASELINE=${BASELINE:-} REPEATS=${REPEATS:-} IMAGING_ARGS=${IMAGING_ARGS:---only=registration} ONLY=${ONLY:-}
 exec python3 - "$@" <<'PYTHON'
 import datetime, json, math, os, re, statistics, subprocess, sys, time
 
@@ -129,138 +132,153 @@ def ratio(a, b, f="%.2f"):
     return "n/a" if not a or not b or math.isnan(a) or math.isnan(b) else f % (a / b)
 
 
+ONLY = [x.strip() for x in os.environ.get("ONLY", "").split(",") if x.strip()]
+SECTIONS = ("voxel", "region", "threads", "sph", "peers")
+for x in ONLY:
+    if x not in SECTIONS:
+        sys.exit("run-all.sh: ONLY=%s: unknown section %r; use a comma list of %s" % (os.environ["ONLY"], x, ", ".join(SECTIONS)))
+
+
+def want(section):
+    return not ONLY or section in ONLY
+
+
 summary = []  # (benchmark, figure, ratio, command)
 details = []
 print("run-all.sh: %s, output %s" % ("QUICK" if QUICK else "full", OUT), file=sys.stderr)
 start_load = load()
 
-# 1. The voxel injection on the bundled phantom (the paper's scene, 1 thread), against the baseline.
-volumes = [1, 5] if QUICK else [1, 5, 10]
-phantom = {v: paired("phantom-%gml" % v, v) for v in volumes}
-rows = ["| volume | build | wall (s) | CPU (s) | peak memory (MB) | solves | CG iterations, mean | solve (s) | tip pressure (Pa) |",
-        "|---|---|---|---|---|---|---|---|---|"]
-for v in volumes:
-    for variant in ("baseline", "current"):
-        rs = phantom[v][variant]
-        if not rs:
-            continue
-        rows.append("| %g ml | %s | %s | %s | %s | %s | %s | %s | %s |" % (
-            v, variant, fmt(med(rs, "wall")), fmt(med(rs, "cpu")), fmt(med(rs, "rss_mb"), "%.0f"),
-            fmt(med(rs, "steps"), "%.0f"), fmt(med(rs, "iterations"), "%.1f"), fmt(med(rs, "solve_s")),
-            fmt(med(rs, "tip_pa"), "%.1f")))
-    cur, base = phantom[v]["current"], phantom[v]["baseline"]
-    cmd = "cementsph " + cur[0]["cmd"].split(" --out ")[0]
-    summary.append(("voxel inject %g ml, phantom, 1 thread" % v, "%s s CPU (%s s wall)" % (fmt(med(cur, "cpu")), fmt(med(cur, "wall"))),
-                    "%s x faster (CPU), %s x (wall)" % (ratio(med(base, "cpu"), med(cur, "cpu")), ratio(med(base, "wall"), med(cur, "wall"))) if base else "n/a", cmd))
-    summary.append(("  its pressure solve", "%s s, %s CG iterations/solve" % (fmt(med(cur, "solve_s")), fmt(med(cur, "iterations"), "%.1f")),
-                    "%s x faster, %s x fewer iterations" % (ratio(med(base, "solve_s"), med(cur, "solve_s")), ratio(med(base, "iterations"), med(cur, "iterations"), "%.1f")) if base else "n/a", "(metrics.json)"))
-growth = ["| build | CPU 5 ml / 1 ml | exponent 1-5 ml | CPU 10 ml / 5 ml | exponent 5-10 ml |", "|---|---|---|---|---|"]
-for variant in ("baseline", "current"):
-    c = {v: med(phantom[v][variant], "cpu") for v in volumes if phantom[v][variant]}
-    if 1 not in c or 5 not in c:
-        continue
-    e15 = math.log(c[5] / c[1]) / math.log(5)
-    r510 = c[10] / c[5] if 10 in c else float("nan")
-    e510 = math.log(r510) / math.log(2) if 10 in c else float("nan")
-    growth.append("| %s | %.2f | %.2f | %s | %s |" % (variant, c[5] / c[1], e15, fmt(r510), fmt(e510)))
-    if variant == "current":
-        summary.append(("voxel inject cost growth with volume", "CPU ~ V^%.2f (1-5 ml)%s" % (e15, ", V^%.2f (5-10 ml): 10 ml = %.2f x 5 ml" % (e510, r510) if 10 in c else ""),
-                        "target 10 ml <= 2.5 x 5 ml: %s" % ("met" if r510 <= 2.5 else "not met") if 10 in c else "n/a", "(the runs above)"))
-details.append("### Voxel Darcy injection, bundled phantom (94 x 94 x 88 voxels), paper scene, 1 thread\n\n"
-               "Medians of %d interleaved run(s) per build; CPU = user + system of the process.\n\n%s\n\nCost growth (CPU time):\n\n%s\n"
-               % (REPEATS, "\n".join(rows), "\n".join(growth)))
-
-# 2. Whole-scan region against the 40 mm region on a larger foam CT (200 x 200 x 188 voxels).
-big = os.path.join(OUT, "big-phantom")
-if not os.path.exists(os.path.join(big, "pre.nrrd")):
-    r = run([CURRENT, "phantom", "--out", big, "--size-mm", "80", "--no-post", "--threads", "1", "--quiet"], log=big + ".log")
-    if r["rc"] != 0:
-        sys.exit("run-all.sh: could not make the large phantom (see %s.log)" % big)
-bigTip = "47.705,46.295,48.25"  # a pore voxel near the centre of seed 1's 80 mm block
-bigVolume = 1 if QUICK else 5
-region = {}
-for roi in (40, 200):
-    region[roi] = paired("region-%dmm" % roi, bigVolume, ct=os.path.join(big, "pre.nrrd"), tip=bigTip,
-                         extra=["--set", "roi_size_mm=%d" % roi, "--allow-large"])
-rows = ["| region | build | wall (s) | CPU (s) | peak memory (MB) | solve (s) | tip pressure (Pa) |", "|---|---|---|---|---|---|---|"]
-for roi in (40, 200):
-    for variant in ("baseline", "current"):
-        rs = region[roi][variant]
-        if rs:
-            rows.append("| %s | %s | %s | %s | %s | %s | %s |" % ("40 mm" if roi == 40 else "whole scan (200 mm)", variant, fmt(med(rs, "wall")),
-                        fmt(med(rs, "cpu")), fmt(med(rs, "rss_mb"), "%.0f"), fmt(med(rs, "solve_s"), "%.3f"), fmt(med(rs, "tip_pa"), "%.1f")))
-for variant in ("baseline", "current"):
-    a, b = region[200][variant], region[40][variant]
-    if a and b:
-        rows.append("\n%s: whole scan / 40 mm = %s x CPU, %s x wall, %s x memory, %s x solve time" % (
-            variant, ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "wall"), med(b, "wall")),
-            ratio(med(a, "rss_mb"), med(b, "rss_mb")), ratio(med(a, "solve_s"), med(b, "solve_s"))))
-a, b = region[200]["current"], region[40]["current"]
-summary.append(("voxel inject %g ml, whole-scan region / 40 mm region (200 x 200 x 188 CT)" % bigVolume,
-                "%s x CPU, %s x memory" % (ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "rss_mb"), med(b, "rss_mb"))),
-                "baseline: %s x CPU, %s x memory" % (ratio(med(region[200]["baseline"], "cpu"), med(region[40]["baseline"], "cpu")),
-                                                   ratio(med(region[200]["baseline"], "rss_mb"), med(region[40]["baseline"], "rss_mb"))) if BASE else "n/a",
-                "cementsph " + a[0]["cmd"].split(" --out ")[0]))
-details.append("### Whole-scan region against the 40 mm region (`cementsph phantom --size-mm 80`: 200 x 200 x 188 voxels), %g ml, 1 thread\n\n%s\n"
-               % (bigVolume, "\n".join(rows)))
-
-# 3. Threads: 1 against 2, with passive and with active (spinning) OpenMP waiting, at 5 ml.
-rows = ["| build | threads | OMP_WAIT_POLICY | wall (s) | CPU (s) | wall / 1 thread |", "|---|---|---|---|---|---|"]
-for variant, binary in (("current", CURRENT), ("baseline", BASE)):
-    if not binary or (QUICK and variant == "baseline"):
-        continue
-    one = None
-    for threads, policy in ((1, "PASSIVE"), (2, "PASSIVE"), (2, "unset"), (2, "ACTIVE")):
-        reps = REPEATS if variant == "current" else 1  # the baseline once: its spinning runs take minutes
-        rs = [inject(binary, "threads-%s-%d-%s-%d" % (variant, threads, policy, rep), 5, threads=threads,
-                     env={"OMP_WAIT_POLICY": None if policy == "unset" else policy}) for rep in range(reps)]
-        w = med(rs, "wall")
-        one = one or w
-        rows.append("| %s | %d | %s | %s | %s | %s |" % (variant, threads, policy, fmt(w), fmt(med(rs, "cpu")), ratio(w, one)))
-        if variant == "current" and threads == 2:
-            summary.append(("voxel inject 5 ml, 2 threads / 1 thread, OMP_WAIT_POLICY %s" % policy, "%s s wall, %s s CPU" % (fmt(w), fmt(med(rs, "cpu"))),
-                            "%s x the 1-thread wall time (load %.1f)" % (ratio(w, one), loads[-1]), "cementsph inject ... --volume-ml 5 --threads 2"))
-details.append("### Threads, 5 ml on the bundled phantom (the load average is the machine's, other jobs included)\n\n%s\n" % "\n".join(rows))
-
-# 4. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
-sph = exe(BUILD, "SPHStepBenchmark")
-if sph:
-    filt = "BM_PeriodicBox200k/(1|2)/(0|20)/" if QUICK else "BM_"
-    js = os.path.join(OUT, "sph-step.json")
-    args = [sph, "--benchmark_filter=" + filt, "--benchmark_out=" + js, "--benchmark_out_format=json",
-            "--benchmark_min_time=%s" % ("0.2" if QUICK else "0.5")]
-    if not QUICK:
-        args += ["--benchmark_repetitions=3", "--benchmark_report_aggregates_only=true"]
-    r = run(args, log=os.path.join(OUT, "sph-step.log"), env={"OMP_WAIT_POLICY": "PASSIVE"})  # not through the launcher
-    bench = {}
-    if r["rc"] == 0:
-        for b in json.load(open(js))["benchmarks"]:
-            if b.get("aggregate_name", "median") != "median":
+if want("voxel"):
+    # 1. The voxel injection on the bundled phantom (the paper's scene, 1 thread), against the baseline.
+    volumes = [1, 5] if QUICK else [1, 5, 10]
+    phantom = {v: paired("phantom-%gml" % v, v) for v in volumes}
+    rows = ["| volume | build | wall (s) | CPU (s) | peak memory (MB) | solves | CG iterations, mean | solve (s) | tip pressure (Pa) |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    for v in volumes:
+        for variant in ("baseline", "current"):
+            rs = phantom[v][variant]
+            if not rs:
                 continue
-            name = re.sub(r"_median$", "", b["run_name"] if "run_name" in b else b["name"])
-            bench[name] = b
-    rows = ["| benchmark / threads / skin (% of h) | ms per step | fluid-particle-steps/s | real-time factor |", "|---|---|---|---|"]
-    for name, b in sorted(bench.items()):
-        ms = b["real_time"] * {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[b["time_unit"]]
-        rows.append("| %s | %.2f | %s | %s |" % (name.replace("/real_time", ""), ms,
-                    fmt(b.get("fluid_particle_steps_per_s", float("nan")) / 1e6, "%.2f M"), fmt(b.get("real_time_factor", float("nan")), "%.1f")))
-    def fps(n):
-        b = bench.get(n)
-        return b.get("fluid_particle_steps_per_s") if b else None
-    p1, p2, p10 = fps("BM_PeriodicBox200k/1/20/real_time"), fps("BM_PeriodicBox200k/2/20/real_time"), fps("BM_PeriodicBox200k/1/0/real_time")
-    summary.append(("SPH step, 205k-particle periodic box, skin 0.2 h, 2 threads", fmt((p2 or float("nan")) / 1e6, "%.2f M fluid-particle-steps/s"),
-                    "2 threads / 1: %s x; skin 0.2 h / no skin (1 thread): %s x" % (ratio(p2, p1), ratio(p1, p10)), "SPHStepBenchmark --benchmark_filter=" + filt))
-    i1, i2 = bench.get("BM_Injection100s/1/iterations:1/real_time"), bench.get("BM_Injection100s/2/iterations:1/real_time")
-    if i1 and i2:
-        summary.append(("SPH injection 5 ml over 100 s (3374 particles)", "%.1f s (1 thread), %.1f s (2 threads)" % (i1["real_time"] * 1e-3 if i1["time_unit"] == "ms" else i1["real_time"], i2["real_time"] * 1e-3 if i2["time_unit"] == "ms" else i2["real_time"]),
-                        "2 threads / 1: %s x faster" % ratio(i1["real_time"], i2["real_time"]), "SPHStepBenchmark --benchmark_filter=Injection"))
-    details.append("### SPH engine step benchmark (medians%s; wall time per step)\n\n%s\n" % ("" if QUICK else " of 3", "\n".join(rows)))
-else:
-    details.append("### SPH engine step benchmark\n\nNot built (configure with -DCEMENTSPH_BUILD_BENCHMARKS=ON and build SPHStepBenchmark).\n")
+            rows.append("| %g ml | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                v, variant, fmt(med(rs, "wall")), fmt(med(rs, "cpu")), fmt(med(rs, "rss_mb"), "%.0f"),
+                fmt(med(rs, "steps"), "%.0f"), fmt(med(rs, "iterations"), "%.1f"), fmt(med(rs, "solve_s")),
+                fmt(med(rs, "tip_pa"), "%.1f")))
+        cur, base = phantom[v]["current"], phantom[v]["baseline"]
+        cmd = "cementsph " + cur[0]["cmd"].split(" --out ")[0]
+        summary.append(("voxel inject %g ml, phantom, 1 thread" % v, "%s s CPU (%s s wall)" % (fmt(med(cur, "cpu")), fmt(med(cur, "wall"))),
+                        "%s x faster (CPU), %s x (wall)" % (ratio(med(base, "cpu"), med(cur, "cpu")), ratio(med(base, "wall"), med(cur, "wall"))) if base else "n/a", cmd))
+        summary.append(("  its pressure solve", "%s s, %s CG iterations/solve" % (fmt(med(cur, "solve_s")), fmt(med(cur, "iterations"), "%.1f")),
+                        "%s x faster, %s x fewer iterations" % (ratio(med(base, "solve_s"), med(cur, "solve_s")), ratio(med(base, "iterations"), med(cur, "iterations"), "%.1f")) if base else "n/a", "(metrics.json)"))
+    growth = ["| build | CPU 5 ml / 1 ml | exponent 1-5 ml | CPU 10 ml / 5 ml | exponent 5-10 ml |", "|---|---|---|---|---|"]
+    for variant in ("baseline", "current"):
+        c = {v: med(phantom[v][variant], "cpu") for v in volumes if phantom[v][variant]}
+        if 1 not in c or 5 not in c:
+            continue
+        e15 = math.log(c[5] / c[1]) / math.log(5)
+        r510 = c[10] / c[5] if 10 in c else float("nan")
+        e510 = math.log(r510) / math.log(2) if 10 in c else float("nan")
+        growth.append("| %s | %.2f | %.2f | %s | %s |" % (variant, c[5] / c[1], e15, fmt(r510), fmt(e510)))
+        if variant == "current":
+            summary.append(("voxel inject cost growth with volume", "CPU ~ V^%.2f (1-5 ml)%s" % (e15, ", V^%.2f (5-10 ml): 10 ml = %.2f x 5 ml" % (e510, r510) if 10 in c else ""),
+                            "target 10 ml <= 2.5 x 5 ml: %s" % ("met" if r510 <= 2.5 else "not met") if 10 in c else "n/a", "(the runs above)"))
+    details.append("### Voxel Darcy injection, bundled phantom (94 x 94 x 88 voxels), paper scene, 1 thread\n\n"
+                   "Medians of %d interleaved run(s) per build; CPU = user + system of the process.\n\n%s\n\nCost growth (CPU time):\n\n%s\n"
+                   % (REPEATS, "\n".join(rows), "\n".join(growth)))
+
+if want("region"):
+    # 2. Whole-scan region against the 40 mm region on a larger foam CT (200 x 200 x 188 voxels).
+    big = os.path.join(OUT, "big-phantom")
+    if not os.path.exists(os.path.join(big, "pre.nrrd")):
+        r = run([CURRENT, "phantom", "--out", big, "--size-mm", "80", "--no-post", "--threads", "1", "--quiet"], log=big + ".log")
+        if r["rc"] != 0:
+            sys.exit("run-all.sh: could not make the large phantom (see %s.log)" % big)
+    bigTip = "47.705,46.295,48.25"  # a pore voxel near the centre of seed 1's 80 mm block
+    bigVolume = 1 if QUICK else 5
+    region = {}
+    for roi in (40, 200):
+        region[roi] = paired("region-%dmm" % roi, bigVolume, ct=os.path.join(big, "pre.nrrd"), tip=bigTip,
+                             extra=["--set", "roi_size_mm=%d" % roi, "--allow-large"])
+    rows = ["| region | build | wall (s) | CPU (s) | peak memory (MB) | solve (s) | tip pressure (Pa) |", "|---|---|---|---|---|---|---|"]
+    for roi in (40, 200):
+        for variant in ("baseline", "current"):
+            rs = region[roi][variant]
+            if rs:
+                rows.append("| %s | %s | %s | %s | %s | %s | %s |" % ("40 mm" if roi == 40 else "whole scan (200 mm)", variant, fmt(med(rs, "wall")),
+                            fmt(med(rs, "cpu")), fmt(med(rs, "rss_mb"), "%.0f"), fmt(med(rs, "solve_s"), "%.3f"), fmt(med(rs, "tip_pa"), "%.1f")))
+    for variant in ("baseline", "current"):
+        a, b = region[200][variant], region[40][variant]
+        if a and b:
+            rows.append("\n%s: whole scan / 40 mm = %s x CPU, %s x wall, %s x memory, %s x solve time" % (
+                variant, ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "wall"), med(b, "wall")),
+                ratio(med(a, "rss_mb"), med(b, "rss_mb")), ratio(med(a, "solve_s"), med(b, "solve_s"))))
+    a, b = region[200]["current"], region[40]["current"]
+    summary.append(("voxel inject %g ml, whole-scan region / 40 mm region (200 x 200 x 188 CT)" % bigVolume,
+                    "%s x CPU, %s x memory" % (ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "rss_mb"), med(b, "rss_mb"))),
+                    "baseline: %s x CPU, %s x memory" % (ratio(med(region[200]["baseline"], "cpu"), med(region[40]["baseline"], "cpu")),
+                                                       ratio(med(region[200]["baseline"], "rss_mb"), med(region[40]["baseline"], "rss_mb"))) if BASE else "n/a",
+                    "cementsph " + a[0]["cmd"].split(" --out ")[0]))
+    details.append("### Whole-scan region against the 40 mm region (`cementsph phantom --size-mm 80`: 200 x 200 x 188 voxels), %g ml, 1 thread\n\n%s\n"
+                   % (bigVolume, "\n".join(rows)))
+
+if want("threads"):
+    # 3. Threads: 1 against 2, with passive and with active (spinning) OpenMP waiting, at 5 ml.
+    rows = ["| build | threads | OMP_WAIT_POLICY | wall (s) | CPU (s) | wall / 1 thread |", "|---|---|---|---|---|---|"]
+    for variant, binary in (("current", CURRENT), ("baseline", BASE)):
+        if not binary or (QUICK and variant == "baseline"):
+            continue
+        one = None
+        for threads, policy in ((1, "PASSIVE"), (2, "PASSIVE"), (2, "unset"), (2, "ACTIVE")):
+            reps = REPEATS if variant == "current" else 1  # the baseline once: its spinning runs take minutes
+            rs = [inject(binary, "threads-%s-%d-%s-%d" % (variant, threads, policy, rep), 5, threads=threads,
+                         env={"OMP_WAIT_POLICY": None if policy == "unset" else policy}) for rep in range(reps)]
+            w = med(rs, "wall")
+            one = one or w
+            rows.append("| %s | %d | %s | %s | %s | %s |" % (variant, threads, policy, fmt(w), fmt(med(rs, "cpu")), ratio(w, one)))
+            if variant == "current" and threads == 2:
+                summary.append(("voxel inject 5 ml, 2 threads / 1 thread, OMP_WAIT_POLICY %s" % policy, "%s s wall, %s s CPU" % (fmt(w), fmt(med(rs, "cpu"))),
+                                "%s x the 1-thread wall time (load %.1f)" % (ratio(w, one), loads[-1]), "cementsph inject ... --volume-ml 5 --threads 2"))
+    details.append("### Threads, 5 ml on the bundled phantom (the load average is the machine's, other jobs included)\n\n%s\n" % "\n".join(rows))
+
+if want("sph"):
+    # 4. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
+    sph = exe(BUILD, "SPHStepBenchmark")
+    if sph:
+        filt = "BM_PeriodicBox200k/(1|2)/(0|20)/" if QUICK else "BM_"
+        js = os.path.join(OUT, "sph-step.json")
+        args = [sph, "--benchmark_filter=" + filt, "--benchmark_out=" + js, "--benchmark_out_format=json",
+                "--benchmark_min_time=%s" % ("0.2" if QUICK else "0.5")]
+        if not QUICK:
+            args += ["--benchmark_repetitions=3", "--benchmark_report_aggregates_only=true"]
+        r = run(args, log=os.path.join(OUT, "sph-step.log"), env={"OMP_WAIT_POLICY": "PASSIVE"})  # not through the launcher
+        bench = {}
+        if r["rc"] == 0:
+            for b in json.load(open(js))["benchmarks"]:
+                if b.get("aggregate_name", "median") != "median":
+                    continue
+                name = re.sub(r"_median$", "", b["run_name"] if "run_name" in b else b["name"])
+                bench[name] = b
+        rows = ["| benchmark / threads / skin (% of h) | ms per step | fluid-particle-steps/s | real-time factor |", "|---|---|---|---|"]
+        for name, b in sorted(bench.items()):
+            ms = b["real_time"] * {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[b["time_unit"]]
+            rows.append("| %s | %.2f | %s | %s |" % (name.replace("/real_time", ""), ms,
+                        fmt(b.get("fluid_particle_steps_per_s", float("nan")) / 1e6, "%.2f M"), fmt(b.get("real_time_factor", float("nan")), "%.1f")))
+        def fps(n):
+            b = bench.get(n)
+            return b.get("fluid_particle_steps_per_s") if b else None
+        p1, p2, p10 = fps("BM_PeriodicBox200k/1/20/real_time"), fps("BM_PeriodicBox200k/2/20/real_time"), fps("BM_PeriodicBox200k/1/0/real_time")
+        summary.append(("SPH step, 205k-particle periodic box, skin 0.2 h, 2 threads", fmt((p2 or float("nan")) / 1e6, "%.2f M fluid-particle-steps/s"),
+                        "2 threads / 1: %s x; skin 0.2 h / no skin (1 thread): %s x" % (ratio(p2, p1), ratio(p1, p10)), "SPHStepBenchmark --benchmark_filter=" + filt))
+        i1, i2 = bench.get("BM_Injection100s/1/iterations:1/real_time"), bench.get("BM_Injection100s/2/iterations:1/real_time")
+        if i1 and i2:
+            summary.append(("SPH injection 5 ml over 100 s (3374 particles)", "%.1f s (1 thread), %.1f s (2 threads)" % (i1["real_time"] * 1e-3 if i1["time_unit"] == "ms" else i1["real_time"], i2["real_time"] * 1e-3 if i2["time_unit"] == "ms" else i2["real_time"]),
+                            "2 threads / 1: %s x faster" % ratio(i1["real_time"], i2["real_time"]), "SPHStepBenchmark --benchmark_filter=Injection"))
+        details.append("### SPH engine step benchmark (medians%s; wall time per step)\n\n%s\n" % ("" if QUICK else " of 3", "\n".join(rows)))
+    else:
+        details.append("### SPH engine step benchmark\n\nNot built (configure with -DCEMENTSPH_BUILD_BENCHMARKS=ON and build SPHStepBenchmark).\n")
 
 def peers():
     # 5. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
-    if not QUICK:
+    if not QUICK and want("peers"):
         drr = exe(BUILD, "drr-bench")
         if drr:
             log = os.path.join(OUT, "drr-bench.md")
@@ -306,7 +324,8 @@ model = subprocess.run(["sh", "-c", "lscpu | sed -n 's/^Model name: *//p' | head
 mem = [l for l in open("/proc/meminfo") if l.startswith("MemTotal")][0].split()[1]
 rev = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True, text=True).stdout.strip()
 md = []
-md.append("## Benchmarks run %s UTC (%s mode)\n" % (started.strftime("%Y-%m-%d %H:%M"), "QUICK" if QUICK else "full"))
+md.append("## Benchmarks run %s UTC (%s mode%s)\n" % (started.strftime("%Y-%m-%d %H:%M"), "QUICK" if QUICK else "full",
+                                                      ", only " + ", ".join(ONLY) if ONLY else ""))
 md.append("Machine: %s, %d cores, %.0f GB; load average at start %s, at end %s, %.2f-%.2f over the runs (1-minute, other jobs included). "
           "Build measured: `%s` at %s; baseline: %s. %s to %s UTC.\n" % (
               model, os.cpu_count(), int(mem) / 1048576.0, "/".join("%.2f" % x for x in start_load), "/".join("%.2f" % x for x in end_load),
