@@ -37,6 +37,13 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
       ->required();
   sub.add_option("--out", a->out, "Output directory (created): drr.nrrd and drr.png")->required();
   cementsph::app::addDrrGeometryOptions(sub, a->drr, "Detector physical size, mm: height,width [400,400]");
+  // Side by side with plastimatch (docs/drr-figures.md): the two differ in the isocentre's default and in the
+  // row order of the files, nothing else in the geometry.
+  sub.footer("To compare with `plastimatch drr -i exact`: give plastimatch's isocentre (its default is 0,0,0; ours is "
+             "the volume's centre) with --isocenter-mm, the same --sad-mm/--sid-mm (its -g \"sad sid\"), "
+             "--detector-pixels (its -r \"rows cols\") and --detector-size-mm (its -z), and flip rows: plastimatch's "
+             "PFM stores the top row first, drr.nrrd the bottom row first (VTK's order; drr.png is drawn top up). "
+             "Pixel values use plastimatch's scaling (sum of mu * length / 10).");
 
   return [a]() {
     const auto start = std::chrono::steady_clock::now();

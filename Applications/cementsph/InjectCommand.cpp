@@ -155,7 +155,10 @@ json runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
 
 int runInject(const InjectRequest& a, json* metrics) {
   scene::SceneConfig scene = scene::loadSceneFile(a.scene, a.overrides);
-  if (!a.labels.empty()) scene.labelsPath = a.labels;
+  if (!a.labels.empty()) {
+    scene.labelsPath = a.labels;
+    scene.explicitKeys.insert("labels_path"); // set by the user, so an engine that ignores it says so
+  }
   if (a.threads > 0) omp_set_num_threads(a.threads);
   const json m = runFilter(a, scene);
   if (metrics) *metrics = m;
