@@ -184,10 +184,13 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
 #pragma omp parallel for schedule(static)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        double best = none;
-        for (int b = std::max(-rj, -j); b <= std::min(rj, ny - 1 - j); ++b) {
-          const int a = nearestX[std::size_t(j + b) * std::size_t(nx) + std::size_t(i)];
-          if (a >= 0) best = std::min(best, ax[std::size_t(a)] + by[std::size_t(std::abs(b))]);
+        double best = 0.0; // a pore voxel: its own a = b = 0
+        if (solidPlane[std::size_t(j) * std::size_t(nx) + std::size_t(i)]) {
+          best = none;
+          for (int b = std::max(-rj, -j); b <= std::min(rj, ny - 1 - j); ++b) {
+            const int a = nearestX[std::size_t(j + b) * std::size_t(nx) + std::size_t(i)];
+            if (a >= 0) best = std::min(best, ax[std::size_t(a)] + by[std::size_t(std::abs(b))]);
+          }
         }
         g[std::size_t(j) * std::size_t(nx) + std::size_t(i)] = best;
       }
@@ -204,8 +207,10 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
         const std::size_t inPlane = std::size_t(j) * std::size_t(nx) + std::size_t(i);
         const std::size_t n = std::size_t(k) * plane + inPlane;
         if (!s.solid[n]) continue;
-        for (int c = c0; c <= c1; ++c)
-          if (ring[std::size_t((k + c) % ringSize) * plane + inPlane] + cz[std::size_t(std::abs(c))] <= reach2) {
+        // Nearest planes first: most kept voxels have their pore in their own plane.
+        for (int d = 0; d <= rk; ++d)
+          if ((-d >= c0 && ring[std::size_t((k - d) % ringSize) * plane + inPlane] + cz[std::size_t(d)] <= reach2) ||
+              (d > 0 && d <= c1 && ring[std::size_t((k + d) % ringSize) * plane + inPlane] + cz[std::size_t(d)] <= reach2)) {
             keep[n] = 1;
             ++kept;
             break;
