@@ -115,7 +115,9 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
       std::printf("  r %.3f density %.3f p %.0f (oracle %.0f) vr %.3g (oracle %.3g)\n", rm * 1e3, cnt[b] * 0.027 / shell,
                   cnt[b] > 0 ? ps[b] / cnt[b] : 0.0, oracle, cnt[b] > 0 ? vr[b] / cnt[b] : 0.0, Q / (4 * kPi * rm * rm));
       // The profile outside the outlet ball (a = 1.194 mm) and inside 0.7 R: the point-source oracle within 5 %.
-      if (r1 >= 1.25 && r2 <= 2.0) EXPECT_NEAR(ps[b] / cnt[b] / oracle, 1.0, 0.05) << "at r = " << rm * 1e3 << " mm";
+      if (r1 >= 1.25 && r2 <= 2.0) {
+        EXPECT_NEAR(ps[b] / cnt[b] / oracle, 1.0, 0.05) << "at r = " << rm * 1e3 << " mm";
+      }
     }
   }
   EXPECT_NEAR(m["mean_spreading_distance_mm"].get<double>() / (0.75 * R * 1e3), 1.0, 0.02);
