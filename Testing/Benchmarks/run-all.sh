@@ -216,7 +216,8 @@ if want("region"):
                     "%s x CPU, %s x memory" % (ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "rss_mb"), med(b, "rss_mb"))),
                     "baseline: %s x CPU, %s x memory" % (ratio(med(region[200]["baseline"], "cpu"), med(region[40]["baseline"], "cpu")),
                                                        ratio(med(region[200]["baseline"], "rss_mb"), med(region[40]["baseline"], "rss_mb"))) if BASE else "n/a",
-                    "cementsph " + a[0]["cmd"].split(" --out ")[0]))
+                    # the whole-scan run's command, its region setting kept (only the output folder dropped)
+                    "cementsph " + re.sub(r" --out \S+", "", a[0]["cmd"])))
     details.append("### Whole-scan region against the 40 mm region (`cementsph phantom --size-mm 80`: 200 x 200 x 188 voxels), %g ml, 1 thread\n\n%s\n"
                    % (bigVolume, "\n".join(rows)))
 
