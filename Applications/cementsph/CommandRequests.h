@@ -10,6 +10,7 @@
 
 #include "cementsph/drr/XraySequence.h"
 #include "cementsph/imaging/CementSegmentation.h"
+#include "cementsph/scene/SceneSettings.h"
 #include "cementsph/surfacemetrics/Isosurface.h"
 
 #include <nlohmann/json_fwd.hpp>
@@ -24,7 +25,7 @@ namespace cementsph::app {
 struct InjectRequest {
   std::string ct, scene, out;
   std::string labels;                 // --labels: a label map on the CT's grid (scene key labels_path)
-  std::vector<std::string> overrides; // "key=value" scene overrides, applied in order after the scene file
+  scene::SceneSettings settings;      // --set and the scene flags, applied after the scene file
   int threads = 0;                    // 0: the cores the load average leaves free
   bool quiet = false, noPictures = false, allowLarge = false;
 };

@@ -11,13 +11,14 @@
 #include "cementsph/provenance/Provenance.h"
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
-#include "SceneOverrides.h"
 
 #include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/scene/SceneSettings.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -28,7 +29,6 @@
 namespace {
 
 namespace fs = std::filesystem;
-using cementsph::app::exactNumber;
 
 struct DemoOptions {
   std::string dataDir = CEMENTSPH_DATA_DIR;
@@ -55,11 +55,18 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// The plan's volume, rate and viscosity as scene overrides (the keys of truth.json's "injection").
-std::vector<std::string> planOverrides(const nlohmann::json& plan) {
-  return {"tip_mm=" + plan.at("tip_mm").dump(), "volume_ml=" + exactNumber(plan.at("volume_ml").get<double>()),
-          "flow_rate_ml_per_s=" + exactNumber(plan.at("flow_rate_ml_per_s").get<double>()),
-          "viscosity_pa_s=" + exactNumber(plan.at("viscosity_pa_s").get<double>())};
+std::array<double, 3> vector3(const nlohmann::json& v) {
+  return {v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()};
+}
+
+// The plan's tip, volume, rate and viscosity as scene settings (the keys of truth.json's "injection").
+cementsph::scene::SceneSettings planSettings(const nlohmann::json& plan) {
+  cementsph::scene::SceneSettings settings;
+  settings.tipMm = vector3(plan.at("tip_mm"));
+  settings.volumeMl = plan.at("volume_ml").get<double>();
+  settings.flowRateMlPerS = plan.at("flow_rate_ml_per_s").get<double>();
+  settings.viscosityPaS = plan.at("viscosity_pa_s").get<double>();
+  return settings;
 }
 
 void printVertebraSummary(const nlohmann::json& m, const fs::path& out) {
@@ -83,13 +90,11 @@ int runVertebraDemo(const DemoOptions& o) {
   const fs::path out(o.out);
   std::cerr << "demo --vertebra: injecting " << plan.at("volume_ml").get<double>()
             << " ml into the clinical vertebra phantom (DICOM series, 1 x 1 x 1.5 mm voxels) by a transpedicular plan\n";
-  const nlohmann::json& d = plan.at("direction");
   cementsph::app::InjectRequest inject;
   inject.ct = (phantom / "pre_dicom").string();
   inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
-  inject.overrides = {"direction=[" + exactNumber(d.at(0).get<double>()) + "," + exactNumber(d.at(1).get<double>()) + "," +
-                      exactNumber(d.at(2).get<double>()) + "]"};
-  for (const std::string& override : planOverrides(plan)) inject.overrides.push_back(override);
+  inject.settings = planSettings(plan);
+  inject.settings.direction = vector3(plan.at("direction"));
   inject.threads = o.threads;
   inject.out = (out / "inject").string();
   nlohmann::json m;
@@ -150,8 +155,8 @@ bool runFoamSteps(const DemoOptions& o, const fs::path& phantom, const nlohmann:
   cementsph::app::InjectRequest inject;
   inject.ct = (phantom / "pre.nrrd").string();
   inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
-  inject.overrides = {"simulated_ct_snapshots=true"};
-  for (const std::string& override : planOverrides(plan)) inject.overrides.push_back(override);
+  inject.settings = planSettings(plan);
+  inject.settings.simulatedCtSnapshots = true;
   inject.threads = o.threads;
   inject.out = (out / "inject").string();
   if (!step(cementsph::app::runInject(inject, &m.inject))) return false;

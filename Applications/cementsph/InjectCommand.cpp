@@ -62,8 +62,8 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
                "Do not write tip_pressure.png (Fig. 10), injection_pressure.png, cement_slices.png, cement_surface.png nor, with simulated_ct_snapshots, the X-ray sequence "
                "in DIR/xray (Fig. 12)");
   return [a, &sub]() {
-    // Flags given on the command line override the scene file (and --set), in this order.
-    a->request.overrides = cementsph::app::sceneOverrides(sub, a->overrides);
+    // Flags given on the command line override the scene file (and --set).
+    a->request.settings = cementsph::app::sceneSettings(sub, a->overrides);
     return cementsph::app::runInject(a->request);
   };
 }
@@ -91,27 +91,13 @@ std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
   return at;
 }
 
-// cement_slices.png: through the largest leak if there is one, else through the tip; the cannula, each leak in its
-// site class's colour (the nearest site of metrics.json) and, with a label map, the target vertebra's outline.
+// cement_slices.png: through the largest leak if there is one (drawn red), else through the tip.
 void drawCementSlices(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
   const std::array<double, 3> centre =
       largestLeakMm(m).value_or(std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()});
   const auto sim = imaging::readVolume((out / "simulated_ct.nrrd").string());
   const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
-  rendering::CementSlicesOptions options;
-  options.tipMm = std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
-  const Eigen::Vector3d d = scene.direction.normalized();
-  options.directionUnit = std::array<double, 3>{d.x(), d.y(), d.z()};
-  for (const auto& site : m.value("leakage_sites", json::array()))
-    options.leakSites.push_back({site["position_mm"].get<std::array<double, 3>>(), site["site_class"].get<std::string>()});
-  // The label map is on the input CT's grid, as simulated_ct.nrrd is; the vertebra is its label at the tip, or
-  // label_table's target_vertebra.
-  const auto anatomy = scene.labelsPath.empty() ? nullptr : imaging::readVolume(scene.labelsPath);
-  const auto anatomyVtk = anatomy ? imaging::toVtk(anatomy.GetPointer()) : nullptr;
-  options.vertebraMask = anatomyVtk;
-  if (scene.labelTable.is_object()) options.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
-  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), centre, png,
-                               options);
+  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), centre, png);
 }
 
 // cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the
@@ -168,7 +154,7 @@ json runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
 } // namespace
 
 int runInject(const InjectRequest& a, json* metrics) {
-  scene::SceneConfig scene = scene::loadSceneFile(a.scene, a.overrides);
+  scene::SceneConfig scene = scene::loadSceneFile(a.scene, a.settings);
   if (!a.labels.empty()) {
     scene.labelsPath = a.labels;
     scene.explicitKeys.insert("labels_path"); // set by the user, so an engine that ignores it says so

@@ -46,8 +46,9 @@ using namespace cementsph;
 planning::PlanRequest planRequest(const PlanArgs& a) {
   planning::PlanRequest r;
   // The scene's tip and volume are the plan's to choose: the entry stands in for the tip while reading it.
-  r.scene = scene::loadSceneFile(a.scene, {"tip_mm=[" + std::to_string(a.entry[0]) + "," + std::to_string(a.entry[1]) +
-                                               "," + std::to_string(a.entry[2]) + "]"});
+  scene::SceneSettings entryAsTip;
+  entryAsTip.tipMm = {a.entry[0], a.entry[1], a.entry[2]};
+  r.scene = scene::loadSceneFile(a.scene, entryAsTip);
   r.entryMm = vec(a.entry);
   r.direction = vec(a.direction);
   r.minDepthMm = a.minDepthMm;

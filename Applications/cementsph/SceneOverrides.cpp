@@ -23,7 +23,7 @@ void addSceneOverrideOptions(CLI::App& sub, SceneOverrideArgs& a) {
   sub.add_option("--preset", a.preset, "Override the model preset (default, paper)");
 }
 
-std::vector<std::string> sceneOverrides(const CLI::App& sub, const SceneOverrideArgs& a) {
+scene::SceneSettings sceneSettings(const CLI::App& sub, const SceneOverrideArgs& a) {
   // A non-finite number is the option's fault, not the scene file's: name the option.
   auto requireFinite = [](const char* option, const std::vector<double>& values) {
     for (double x : values)
@@ -46,18 +46,16 @@ std::vector<std::string> sceneOverrides(const CLI::App& sub, const SceneOverride
   requirePositiveIfGiven("--flow-rate-ml-per-s", a.flowRateMlPerS);
   requirePositiveIfGiven("--viscosity-pa-s", a.viscosityPaS);
   requirePositiveIfGiven("--snapshot-interval-s", a.snapshotIntervalS);
-  // Flags given on the command line override the scene file (and --set), in this order.
-  std::vector<std::string> overrides = a.set;
-  if (!a.tipMm.empty())
-    overrides.push_back("tip_mm=[" + exactNumber(a.tipMm[0]) + "," + exactNumber(a.tipMm[1]) + "," +
-                        exactNumber(a.tipMm[2]) + "]");
-  if (sub.count("--volume-ml")) overrides.push_back("volume_ml=" + exactNumber(a.volumeMl));
-  if (sub.count("--flow-rate-ml-per-s")) overrides.push_back("flow_rate_ml_per_s=" + exactNumber(a.flowRateMlPerS));
-  if (sub.count("--viscosity-pa-s")) overrides.push_back("viscosity_pa_s=" + exactNumber(a.viscosityPaS));
-  if (sub.count("--snapshot-interval-s"))
-    overrides.push_back("snapshot_interval_s=" + exactNumber(a.snapshotIntervalS));
-  if (!a.preset.empty()) overrides.push_back("preset=\"" + a.preset + "\"");
-  return overrides;
+  // Flags given on the command line override the scene file (and --set).
+  scene::SceneSettings settings;
+  settings.set = a.set;
+  if (!a.tipMm.empty()) settings.tipMm = {a.tipMm[0], a.tipMm[1], a.tipMm[2]};
+  if (sub.count("--volume-ml")) settings.volumeMl = a.volumeMl;
+  if (sub.count("--flow-rate-ml-per-s")) settings.flowRateMlPerS = a.flowRateMlPerS;
+  if (sub.count("--viscosity-pa-s")) settings.viscosityPaS = a.viscosityPaS;
+  if (sub.count("--snapshot-interval-s")) settings.snapshotIntervalS = a.snapshotIntervalS;
+  if (!a.preset.empty()) settings.modelPreset = a.preset;
+  return settings;
 }
 
 } // namespace cementsph::app

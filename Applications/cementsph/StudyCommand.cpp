@@ -102,7 +102,7 @@ void checkArgs(const StudyArgs& a) {
 // Everything that can be checked before a run: options, scene, output folder, CT, reference.
 void prepare(const StudyArgs& a, const CLI::App& sub, const parallel::CaseFarm& farm, StudySession& s) {
   checkArgs(a);
-  s.plan.baseScene = scene::loadSceneFile(a.scene, app::sceneOverrides(sub, a.scene_overrides));
+  s.plan.baseScene = scene::loadSceneFile(a.scene, app::sceneSettings(sub, a.scene_overrides));
   s.plan.sizeStudy = !a.noSizeStudy;
   s.plan.radiiMm = a.radiiMm;
   s.plan.integrators = a.integrators;

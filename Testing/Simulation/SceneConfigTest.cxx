@@ -359,3 +359,87 @@ TEST(SceneConfig, TheListOfKeyNamesIsTheParsers) {
   SceneConfig s;
   EXPECT_THROW(applySceneJson(s, json{{"particle_radius", 0.5}}), std::invalid_argument);
 }
+
+// A command's typed settings (SceneSettings: inject's --tip-mm, --volume-ml, ...; plan's entry; demo's plan) are
+// set in the scene's fields as given, over the file's keys and the --set list, before the scene is checked, and
+// recorded as keys the user set. Oracle: the values the test sets, and the lines worked out by hand below (each
+// the line the same value gave as a "key=value" override, which the test also runs).
+TEST(SceneConfig, TypedSettingsLandInTheirFieldsBeforeTheCheckAndAreRecorded) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-scene-settings-test";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "scene.json").string();
+  {
+    // volume_ml -2 is refused by the check unless a setting replaces it first.
+    std::ofstream(path) << R"({"tip_mm": [0, 0, 0], "volume_ml": -2, "viscosity_table": [[0, 50], [60, 200]]})";
+  }
+  SceneSettings g;
+  g.set = {"volume_ml=9", "integrator=overdamped"};
+  g.tipMm = {1.5, -2.25, 3.0};
+  g.direction = {0.0, -1.0, 0.0};
+  g.volumeMl = 0.25; // a typed field wins over a --set of the same key
+  g.flowRateMlPerS = 0.02;
+  g.viscosityPaS = 80.0; // a constant viscosity replaces the file's table, as the key does
+  g.snapshotIntervalS = 0.5;
+  g.simulatedCtSnapshots = true;
+  g.modelPreset = "default";
+  const SceneConfig s = loadSceneFile(path, g);
+  EXPECT_EQ(*s.tipMm, Eigen::Vector3d(1.5, -2.25, 3.0));
+  EXPECT_EQ(s.direction, Eigen::Vector3d(0.0, -1.0, 0.0));
+  EXPECT_EQ(s.volumeMl, 0.25);
+  EXPECT_EQ(s.flowRateMlPerS, 0.02);
+  EXPECT_EQ(s.viscosityPaS, 80.0);
+  EXPECT_TRUE(s.viscosityTable.empty());
+  EXPECT_EQ(s.snapshotIntervalS, 0.5);
+  EXPECT_TRUE(s.simulatedCtSnapshots);
+  EXPECT_EQ(s.modelPreset, "default");
+  EXPECT_EQ(s.integrator, std::optional<std::string>("overdamped")); // the --set list still applies
+  EXPECT_EQ(s.explicitKeys, (std::set<std::string>{"tip_mm", "volume_ml", "viscosity_table", "integrator", "direction",
+                                                   "flow_rate_ml_per_s", "viscosity_pa_s", "snapshot_interval_s",
+                                                   "simulated_ct_snapshots", "preset"}));
+  // With no settings the file's bad volume is what the check sees.
+  EXPECT_THROW(loadSceneFile(path, SceneSettings()), std::invalid_argument);
+
+  auto errorOfSettings = [&](const SceneSettings& settings) {
+    try {
+      (void)loadSceneFile(path, settings);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  auto errorOfOverride = [&](const std::string& assignment) {
+    try {
+      (void)loadSceneFile(path, std::vector<std::string>{"volume_ml=5", assignment});
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  SceneSettings slow;
+  slow.volumeMl = 5.0;
+  slow.flowRateMlPerS = std::ldexp(1.0, -20); // 9.5367431640625e-07 ml/s exactly: 5 ml take 61 days
+  const std::string slowLine = errorOfSettings(slow);
+  EXPECT_EQ(slowLine.rfind("override flow_rate_ml_per_s=9.5367431640625e-07 (command line): scene: key "
+                           "'flow_rate_ml_per_s' is too small: ",
+                           0),
+            0u)
+      << slowLine;
+  EXPECT_EQ(slowLine, errorOfOverride("flow_rate_ml_per_s=9.5367431640625e-07"));
+
+  SceneSettings notFinite;
+  notFinite.volumeMl = 5.0;
+  notFinite.tipMm = {std::nan(""), 0.0, 0.0};
+  EXPECT_EQ(errorOfSettings(notFinite), "override tip_mm=[nan,0,0] (command line): scene: key 'tip_mm' must be finite");
+
+  SceneSettings unknownPreset;
+  unknownPreset.volumeMl = 5.0;
+  unknownPreset.modelPreset = "fast";
+  EXPECT_EQ(errorOfSettings(unknownPreset),
+            "override preset=\"fast\" (command line): scene: key 'preset' must be \"default\" or \"paper\" (got \"fast\")");
+  EXPECT_EQ(errorOfSettings(unknownPreset), errorOfOverride("preset=\"fast\""));
+
+  // A key the settings did not set is the file's fault: the line names the file.
+  SceneSettings tipOnly;
+  tipOnly.tipMm = {1.0, 2.0, 3.0};
+  EXPECT_EQ(errorOfSettings(tipOnly), path + ": scene: key 'volume_ml' must be > 0 (got -2)");
+}

@@ -5,6 +5,7 @@
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/Presets.h"
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -54,13 +55,62 @@ Eigen::Vector3d vector3(const json& v, const std::string& key) {
   return {number(v[0], key), number(v[1], key), number(v[2], key)};
 }
 
+// Every text key is a short name (a preset, a law, a cement): a longer value is not one, and refusing it
+// here keeps it out of the messages that echo it.
+const std::string& shortName(const std::string& value, const std::string& key) {
+  if (value.size() > 200) fail(key, "must be a short name (got " + std::to_string(value.size()) + " characters)");
+  return value;
+}
+
 std::string text(const json& v, const std::string& key) {
   if (!v.is_string()) fail(key, "must be a string");
-  // Every text key is a short name (a preset, a law, a cement): a longer value is not one, and refusing it
-  // here keeps it out of the messages that echo it.
-  if (v.get_ref<const std::string&>().size() > 200)
-    fail(key, "must be a short name (got " + std::to_string(v.get_ref<const std::string&>().size()) + " characters)");
-  return v.get<std::string>();
+  return shortName(v.get_ref<const std::string&>(), key);
+}
+
+void setModelPreset(SceneConfig& s, const std::string& name) {
+  s.modelPreset = shortName(name, "preset");
+  try {
+    (void)sph::modelPreset(s.modelPreset);
+  } catch (const std::invalid_argument&) {
+    fail("preset", "must be \"default\" or \"paper\" (got \"" + shown(s.modelPreset) + "\")");
+  }
+}
+
+double finite(double x, const std::string& key) {
+  if (!std::isfinite(x)) fail(key, "must be finite");
+  return x;
+}
+
+Eigen::Vector3d finite(const std::array<double, 3>& v, const std::string& key) {
+  return {finite(v[0], key), finite(v[1], key), finite(v[2], key)};
+}
+
+// A double written so that it reads back exactly (17 significant digits), as the command line's overrides
+// were written when they were "key=value" strings.
+std::string exactNumber(double x) {
+  std::ostringstream s;
+  s.precision(17);
+  s << x;
+  return s.str();
+}
+
+// Each setting given, as the key it sets and as "key=value" for a message, in the order applied.
+std::vector<std::pair<std::string, std::string>> givenSettings(const SceneSettings& g) {
+  std::vector<std::pair<std::string, std::string>> given;
+  for (const std::string& o : g.set) given.emplace_back(o.substr(0, o.find('=')), o);
+  auto add = [&](const std::string& key, const std::string& value) { given.emplace_back(key, key + "=" + value); };
+  auto vector = [](const std::array<double, 3>& v) {
+    return "[" + exactNumber(v[0]) + "," + exactNumber(v[1]) + "," + exactNumber(v[2]) + "]";
+  };
+  if (g.tipMm) add("tip_mm", vector(*g.tipMm));
+  if (g.direction) add("direction", vector(*g.direction));
+  if (g.volumeMl) add("volume_ml", exactNumber(*g.volumeMl));
+  if (g.flowRateMlPerS) add("flow_rate_ml_per_s", exactNumber(*g.flowRateMlPerS));
+  if (g.viscosityPaS) add("viscosity_pa_s", exactNumber(*g.viscosityPaS));
+  if (g.snapshotIntervalS) add("snapshot_interval_s", exactNumber(*g.snapshotIntervalS));
+  if (g.simulatedCtSnapshots) add("simulated_ct_snapshots", *g.simulatedCtSnapshots ? "true" : "false");
+  if (g.modelPreset) add("preset", "\"" + *g.modelPreset + "\"");
+  return given;
 }
 
 void requirePositive(double x, const std::string& key) {
@@ -107,12 +157,7 @@ void applySceneJson(SceneConfig& s, const json& j) {
       const SceneConfig p = scenePreset(text(v, key));
       (void)p; // the preset is applied by the loaders before the other keys
     } else if (key == "preset") {
-      s.modelPreset = text(v, key);
-      try {
-        (void)sph::modelPreset(s.modelPreset);
-      } catch (const std::invalid_argument&) {
-        fail(key, "must be \"default\" or \"paper\" (got \"" + shown(s.modelPreset) + "\")");
-      }
+      setModelPreset(s, text(v, key));
     } else if (key == "particle_radius_mm") s.particleRadiusMm = number(v, key);
     else if (key == "tip_mm") s.tipMm = vector3(v, key);
     else if (key == "direction") s.direction = vector3(v, key);
@@ -261,6 +306,31 @@ void applySceneOverride(SceneConfig& s, const std::string& assignment) {
   applySceneJson(s, json{{key, v}});
 }
 
+void applySceneSettings(SceneConfig& s, const SceneSettings& g) {
+  for (const std::string& o : g.set) applySceneOverride(s, o);
+  // A number the key would refuse in a scene file is refused here as there, naming the key.
+  auto put = [&](auto& field, const auto& given, const char* key) {
+    if (!given) return false;
+    field = finite(*given, key);
+    s.explicitKeys.insert(key);
+    return true;
+  };
+  put(s.tipMm, g.tipMm, "tip_mm");
+  put(s.direction, g.direction, "direction");
+  put(s.volumeMl, g.volumeMl, "volume_ml");
+  put(s.flowRateMlPerS, g.flowRateMlPerS, "flow_rate_ml_per_s");
+  if (put(s.viscosityPaS, g.viscosityPaS, "viscosity_pa_s")) s.viscosityTable.clear(); // a constant, as the key
+  put(s.snapshotIntervalS, g.snapshotIntervalS, "snapshot_interval_s");
+  if (g.simulatedCtSnapshots) {
+    s.simulatedCtSnapshots = *g.simulatedCtSnapshots;
+    s.explicitKeys.insert("simulated_ct_snapshots");
+  }
+  if (g.modelPreset) {
+    setModelPreset(s, *g.modelPreset);
+    s.explicitKeys.insert("preset");
+  }
+}
+
 sph::ViscositySchedule SceneConfig::viscositySchedule() const {
   if (!viscosityTable.empty()) return sph::ViscositySchedule::table(viscosityTable);
   if (viscosityRatePaPerS) return sph::ViscositySchedule::linear(viscosityPaS, *viscosityRatePaPerS);
@@ -347,7 +417,7 @@ sph::FixedSumMethod SceneConfig::fixedSumMethod() const {
   return modelPreset == "paper" ? sph::FixedSumMethod::Exact : sph::FixedSumMethod::Tabulated;
 }
 
-SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrides) {
+SceneConfig sceneFromJson(const json& j, const SceneSettings& settings) {
   if (!j.is_object()) throw std::invalid_argument("scene: the scene must be a JSON object");
   SceneConfig s = scenePreset("paper");
   if (j.contains("scene_preset")) {
@@ -355,12 +425,18 @@ SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrid
     s = scenePreset(text(j["scene_preset"], "scene_preset"));
   }
   applySceneJson(s, j);
-  for (const std::string& o : overrides) applySceneOverride(s, o);
+  applySceneSettings(s, settings);
   s.validate();
   return s;
 }
 
-SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string>& overrides) {
+SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrides) {
+  SceneSettings settings;
+  settings.set = overrides;
+  return sceneFromJson(j, settings);
+}
+
+SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot open the scene file");
   // The whole file is the JSON object: read it all (a scene is a few kB; 16 MiB is far past any), and refuse
@@ -378,17 +454,21 @@ SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string
   if (j.is_discarded())
     throw std::invalid_argument(path + ": not valid JSON (one object, nothing after it); check the file");
   try {
-    return sceneFromJson(j, overrides);
+    return sceneFromJson(j, settings);
   } catch (const std::invalid_argument& e) {
-    // Blame the command line's override when it set the key at fault, else the file.
+    // Blame the command line's setting when it set the key at fault, else the file.
     const std::string what = e.what();
-    for (const std::string& o : overrides) {
-      const std::string key = o.substr(0, o.find('='));
+    for (const auto& [key, assignment] : givenSettings(settings))
       if (what.find("'" + key + "'") != std::string::npos)
-        throw std::invalid_argument("override " + shown(o) + " (command line): " + what);
-    }
+        throw std::invalid_argument("override " + shown(assignment) + " (command line): " + what);
     throw std::invalid_argument(path + ": " + what);
   }
+}
+
+SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string>& overrides) {
+  SceneSettings settings;
+  settings.set = overrides;
+  return loadSceneFile(path, settings);
 }
 
 double SceneConfig::referenceViscosityPaS() const {

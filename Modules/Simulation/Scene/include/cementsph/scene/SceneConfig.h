@@ -85,6 +85,7 @@
 #pragma once
 
 #include "cementsph/scene/BoneCalibration.h"
+#include "cementsph/scene/SceneSettings.h"
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/Viscosity/Curing.h"
 #include "cementsph/sph/Viscosity/Rheology.h"
@@ -189,9 +190,17 @@ void applySceneJson(SceneConfig& base, const nlohmann::json& j);
 // a bare word that is not JSON is taken as a string).
 void applySceneOverride(SceneConfig& base, const std::string& assignment);
 
-// Reads a scene file: its scene_preset (default "paper") first, then its keys. Validated.
+// Applies `settings` (SceneSettings.h) over `base`; a value the key refuses throws as applySceneJson does, naming the
+// key. Does not validate.
+void applySceneSettings(SceneConfig& base, const SceneSettings& settings);
+
+// Reads a scene file: its scene_preset (default "paper") first, then its keys, then the command's settings.
+// Validated. A refusal is one line blaming the command line's setting when it set the key at fault
+// ("override tip_mm=[1,2,3] (command line): scene: key 'tip_mm' ..."), else the file ("PATH: scene: ...").
+SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings);
 SceneConfig loadSceneFile(const std::string& path, const std::vector<std::string>& overrides = {});
 // The same from JSON text (validated).
+SceneConfig sceneFromJson(const nlohmann::json& j, const SceneSettings& settings);
 SceneConfig sceneFromJson(const nlohmann::json& j, const std::vector<std::string>& overrides = {});
 
 nlohmann::json toJson(const SceneConfig& scene);
