@@ -91,13 +91,27 @@ std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
   return at;
 }
 
-// cement_slices.png: through the largest leak if there is one (drawn red), else through the tip.
+// cement_slices.png: through the largest leak if there is one, else through the tip; the cannula, each leak in its
+// site class's colour (the nearest site of metrics.json) and, with a label map, the target vertebra's outline.
 void drawCementSlices(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
   const std::array<double, 3> centre =
       largestLeakMm(m).value_or(std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()});
   const auto sim = imaging::readVolume((out / "simulated_ct.nrrd").string());
   const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
-  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), centre, png);
+  rendering::CementSlicesOptions options;
+  options.tipMm = std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
+  const Eigen::Vector3d d = scene.direction.normalized();
+  options.directionUnit = std::array<double, 3>{d.x(), d.y(), d.z()};
+  for (const auto& site : m.value("leakage_sites", json::array()))
+    options.leakSites.push_back({site["position_mm"].get<std::array<double, 3>>(), site["site_class"].get<std::string>()});
+  // The label map is on the input CT's grid, as simulated_ct.nrrd is; the vertebra is its label at the tip, or
+  // label_table's target_vertebra.
+  const auto anatomy = scene.labelsPath.empty() ? nullptr : imaging::readVolume(scene.labelsPath);
+  const auto anatomyVtk = anatomy ? imaging::toVtk(anatomy.GetPointer()) : nullptr;
+  options.vertebraMask = anatomyVtk;
+  if (scene.labelTable.is_object()) options.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
+  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), centre, png,
+                               options);
 }
 
 // cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the
