@@ -175,6 +175,9 @@ public:
   const std::vector<double>& arrivalTime() const { return arrival_; } // first cement in the voxel [s]; -1 none
   bool filled(std::size_t c) const { return state_[c] == kFilled; }
   const std::vector<std::size_t>& sourceVoxels() const { return source_; }
+  // Every voxel cement has reached, in order of arrival (a superset of those with fill > 0): what a caller
+  // visits to walk the cement in time proportional to it, not to the region.
+  const std::vector<std::size_t>& wetVoxels() const { return wet_; }
   // Superficial (Darcy) velocity at a voxel centre from its face fluxes of the last solve [m/s].
   Eigen::Vector3d darcyVelocity(std::size_t c) const;
   // Pore-volume weighted mean pressure of the source voxels (the pressure the cannula works against) [Pa].

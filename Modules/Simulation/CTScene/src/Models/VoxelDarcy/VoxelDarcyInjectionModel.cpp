@@ -136,9 +136,13 @@ double leakage(const VoxelDarcyFilling& f, const std::vector<std::uint8_t>& soft
 // One point per voxel holding cement.
 vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity) {
   const VoxelMedium& m = f.medium();
+  // The wet voxels, not the whole region (issue 23: a snapshot costs what the cement holds), in index order
+  // as before so that the points come out in the same order.
   std::vector<std::size_t> cells;
-  for (std::size_t c = 0; c < m.count(); ++c)
+  cells.reserve(f.wetVoxels().size());
+  for (std::size_t c : f.wetVoxels())
     if (f.fill()[c] > 0) cells.push_back(c);
+  std::sort(cells.begin(), cells.end());
   const vtkIdType n = vtkIdType(cells.size());
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetDataTypeToFloat(); // mm to 1e-4 of a 40 mm region; half the bytes of doubles
