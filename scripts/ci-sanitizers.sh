@@ -32,15 +32,16 @@ fi
 mkdir -p "$out/obj" "$out/bin" "$out/findings"
 
 # ---- build ----
-sph_src=$(cd "$here" && find Modules/Core/Rheology/src Modules/Core/SPH/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
-includes="-I$here/Modules/Core/Rheology/include -I$here/Modules/Core/SPH/include -I$here/Modules/Simulation/Scene/include -I$here/Modules/Imaging/IO/src \
+sph_src=$(cd "$here" && find Modules/Core/Rheology/src Modules/Core/SPH/src Modules/Core/VoxelDarcy/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
+includes="-I$here/Modules/Core/Rheology/include -I$here/Modules/Core/SPH/include -I$here/Modules/Core/VoxelDarcy/include -I$here/Modules/Simulation/Scene/include -I$here/Modules/Imaging/IO/src \
 -I$here/Testing/Fuzz/targets -isystem /usr/include/eigen3"
-# Unit suites built here: those of Testing/Core/SPH and Testing/Simulation labelled unit that link only
-# CementSPH::SPH or CementSPH::Scene (name:source).
+# Suites built here: those of Testing/Core and Testing/Simulation that link only the plain C++ modules
+# (Rheology, SPH, VoxelDarcy, Scene): the unit ones, and the voxel filling's validation suite (name:source).
 tests="SPHKernelsTest:Testing/Core/SPH/KernelsTest.cxx SPHSimulationTest:Testing/Core/SPH/SimulationTest.cxx
 SPHFixedParticleFieldTest:Testing/Core/SPH/FixedParticleFieldTest.cxx SPHInjectionUnitTest:Testing/Core/SPH/InjectionUnitTest.cxx
 SPHRheologyTest:Testing/Core/SPH/RheologyTest.cxx SceneConfigTest:Testing/Simulation/SceneConfigTest.cxx
-RunEstimateTest:Testing/Simulation/RunEstimateTest.cxx"
+RunEstimateTest:Testing/Simulation/RunEstimateTest.cxx DarcyTableTest:Testing/Core/SPH/DarcyTableTest.cxx
+VoxelDarcyFillingTest:Testing/Core/VoxelDarcy/VoxelDarcyFillingTest.cxx"
 fuzzers="nrrd_header metaimage_header nifti_header scene_json"
 launcher=""
 if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
