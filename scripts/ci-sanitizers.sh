@@ -4,7 +4,7 @@
 #   1. the libFuzzer targets in Testing/Fuzz/targets (nrrd_header, metaimage_header, nifti_header: our
 #      header checks that run before ITK; scene_json: the scene file parser), each run for FUZZ_SECONDS on
 #      its seed corpus Testing/Fuzz/corpus/<target> (new inputs go to a temporary folder, never the tree);
-#   2. the unit suites of the plain C++ core (SPH, Scene), which need neither VTK nor ITK.
+#   2. the suites of the plain C++ modules (Rheology, SPH, VoxelDarcy, Scene), which need neither VTK nor ITK.
 # The suites that link VTK/ITK are not built here: a clang ASan build of the whole tree does not fit CI's
 # time on a 2-core machine. Fails (exit 1) on any build error, fuzzer finding (crash, UB, leak, timeout,
 # out-of-memory) or failed test; a fuzzer's reproducer is left in $SANITIZE_BUILD_DIR/findings/.
