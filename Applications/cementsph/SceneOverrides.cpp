@@ -1,17 +1,9 @@
 #include "SceneOverrides.h"
 
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 namespace cementsph::app {
-
-std::string exactNumber(double x) {
-  std::ostringstream s;
-  s.precision(17);
-  s << x;
-  return s.str();
-}
 
 void addSceneOverrideOptions(CLI::App& sub, SceneOverrideArgs& a) {
   sub.add_option("--set", a.set, "Override a scene key: key=value (JSON value), repeatable");

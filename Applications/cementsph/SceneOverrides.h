@@ -29,7 +29,7 @@ void addSceneOverrideOptions(CLI::App& sub, SceneOverrideArgs& args);
 // number or a volume, rate, viscosity or interval that is not positive.
 scene::SceneSettings sceneSettings(const CLI::App& sub, const SceneOverrideArgs& args);
 
-// A double written so that it reads back exactly (17 significant digits).
-std::string exactNumber(double x);
+// A double written so that it reads back exactly (the Scene module's, for the messages of both).
+using scene::exactNumber;
 
 } // namespace cementsph::app

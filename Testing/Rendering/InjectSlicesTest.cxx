@@ -42,17 +42,8 @@ std::vector<std::string> injectArgs(const fs::path& out) {
 
 // How many pixels of each colour a PNG holds.
 std::map<std::array<int, 3>, int> colourCounts(const fs::path& png) {
-  vtkNew<vtkPNGReader> reader;
-  reader->SetFileName(png.string().c_str());
-  reader->Update();
-  vtkImageData* image = reader->GetOutput();
-  int dims[3];
-  image->GetDimensions(dims);
   std::map<std::array<int, 3>, int> counts;
-  for (int y = 0; y < dims[1]; ++y)
-    for (int x = 0; x < dims[0]; ++x)
-      ++counts[{int(image->GetScalarComponentAsDouble(x, y, 0, 0)), int(image->GetScalarComponentAsDouble(x, y, 0, 1)),
-                int(image->GetScalarComponentAsDouble(x, y, 0, 2))}];
+  for (const auto& rgb : cementsph::rendering::test::readPicture(png).pixels) ++counts[rgb];
   return counts;
 }
 

@@ -33,38 +33,9 @@ using cementsph::rendering::test::scratchFolder;
 
 namespace {
 
-using Rgb = std::array<int, 3>;
-
-// A PNG read back, rows top-down.
-struct Picture {
-  int width = 0, height = 0;
-  std::vector<Rgb> pixels;
-  Rgb at(int x, int y) const { return pixels[std::size_t(y) * std::size_t(width) + std::size_t(x)]; }
-  // Darkness 0 (white) .. 1 (black): the ink of black text on white.
-  double ink(int x, int y) const {
-    const Rgb c = at(x, y);
-    return 1.0 - (c[0] + c[1] + c[2]) / (3.0 * 255.0);
-  }
-};
-
-Picture readPicture(const std::filesystem::path& png) {
-  vtkNew<vtkPNGReader> reader;
-  reader->SetFileName(png.string().c_str());
-  reader->Update();
-  vtkImageData* image = reader->GetOutput();
-  int dims[3];
-  image->GetDimensions(dims);
-  Picture p;
-  p.width = dims[0];
-  p.height = dims[1];
-  p.pixels.resize(std::size_t(dims[0]) * std::size_t(dims[1]));
-  for (int y = 0; y < dims[1]; ++y)
-    for (int x = 0; x < dims[0]; ++x)
-      for (int c = 0; c < 3; ++c)
-        p.pixels[std::size_t(y) * std::size_t(dims[0]) + std::size_t(x)][std::size_t(c)] =
-            int(image->GetScalarComponentAsDouble(x, dims[1] - 1 - y, 0, c));
-  return p;
-}
+using cementsph::rendering::test::Picture;
+using cementsph::rendering::test::readPicture;
+using Rgb = Picture::Rgb;
 
 std::size_t differingPixels(const Picture& a, const Picture& b) {
   std::size_t differing = 0;

@@ -85,15 +85,6 @@ Eigen::Vector3d finite(const std::array<double, 3>& v, const std::string& key) {
   return {finite(v[0], key), finite(v[1], key), finite(v[2], key)};
 }
 
-// A double written so that it reads back exactly (17 significant digits), as the command line's overrides
-// were written when they were "key=value" strings.
-std::string exactNumber(double x) {
-  std::ostringstream s;
-  s.precision(17);
-  s << x;
-  return s.str();
-}
-
 // Each setting given, as the key it sets and as "key=value" for a message, in the order applied.
 std::vector<std::pair<std::string, std::string>> givenSettings(const SceneSettings& g) {
   std::vector<std::pair<std::string, std::string>> given;
@@ -588,6 +579,14 @@ json toJson(const SceneConfig& s) {
     j["second_tip_volume_ml"] = s.secondTipVolumeMl;
   }
   return j;
+}
+
+// As the command line's overrides were written when they were "key=value" strings.
+std::string exactNumber(double x) {
+  std::ostringstream s;
+  s.precision(17);
+  s << x;
+  return s.str();
 }
 
 } // namespace cementsph::scene

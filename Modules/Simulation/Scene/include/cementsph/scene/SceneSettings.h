@@ -27,4 +27,8 @@ struct SceneSettings {
   std::optional<std::string> modelPreset;         // preset
 };
 
+// A double written so that it reads back exactly (17 significant digits): the form of a number in the
+// messages about settings and options.
+std::string exactNumber(double x);
+
 } // namespace cementsph::scene
