@@ -13,7 +13,8 @@
 #   REPEATS=N      repetitions of each voxel run (default 3; QUICK: 1); medians are quoted
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
 #   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
-#                  whole-scan region against the 40 mm one), threads, sph, peers (DRR, registration);
+#                  whole-scan region against the 40 mm one), threads, snapshots (5 ml with its 100 snapshots
+#                  against one), sph, peers (DRR, registration);
 #                  default all. The tables then hold only those sections' figures
 #
 # Writes OUT_DIR/benchmarks.md (the dated tables, machine and load average) and OUT_DIR/runs.jsonl (every
@@ -133,7 +134,7 @@ def ratio(a, b, f="%.2f"):
 
 
 ONLY = [x.strip() for x in os.environ.get("ONLY", "").split(",") if x.strip()]
-SECTIONS = ("voxel", "region", "threads", "sph", "peers")
+SECTIONS = ("voxel", "region", "threads", "snapshots", "sph", "peers")
 for x in ONLY:
     if x not in SECTIONS:
         sys.exit("run-all.sh: ONLY=%s: unknown section %r; use a comma list of %s" % (os.environ["ONLY"], x, ", ".join(SECTIONS)))
@@ -240,8 +241,34 @@ if want("threads"):
                                 "%s x the 1-thread wall time (load %.1f)" % (ratio(w, one), loads[-1]), "cementsph inject ... --volume-ml 5 --threads 2"))
     details.append("### Threads, 5 ml on the bundled phantom (the load average is the machine's, other jobs included)\n\n%s\n" % "\n".join(rows))
 
+if want("snapshots"):
+    # 4. Snapshots: the 5 ml run with the scene's 100 particle snapshots against the same run with only the final
+    # one (snapshot_interval_s past the injection's end). Issue 23's target: at most 1.1 x.
+    rows = ["| build | snapshots | wall (s) | CPU (s) | bytes written (MB) | with / without (wall) | with / without (CPU) |", "|---|---|---|---|---|---|---|"]
+    for variant, binary in (("current", CURRENT), ("baseline", BASE)):
+        if not binary:
+            continue
+        with_, without = [], []
+        for rep in range(REPEATS):
+            pair = [("with", []), ("without", ["--snapshot-interval-s", "1e6"])]
+            if rep % 2:
+                pair.reverse()
+            for kind, extra in pair:
+                r = inject(binary, "snapshots-%s-%s-%d" % (variant, kind, rep), 5, extra=extra)
+                folder = os.path.join(OUT, "runs", "snapshots-%s-%s-%d" % (variant, kind, rep))
+                r["mb"] = sum(os.path.getsize(os.path.join(folder, f)) for f in os.listdir(folder)) / 1e6 if r["rc"] == 0 else None
+                (with_ if kind == "with" else without).append(r)
+        for kind, rs in (("100", with_), ("1 (final)", without)):
+            rows.append("| %s | %s | %s | %s | %s | %s | %s |" % (variant, kind, fmt(med(rs, "wall")), fmt(med(rs, "cpu")), fmt(med(rs, "mb"), "%.0f"),
+                        ratio(med(with_, "wall"), med(without, "wall")) if kind == "100" else "", ratio(med(with_, "cpu"), med(without, "cpu")) if kind == "100" else ""))
+        if variant == "current":
+            summary.append(("voxel inject 5 ml, 100 snapshots / 1 snapshot", "%s s wall, %s s CPU, %s MB" % (fmt(med(with_, "wall")), fmt(med(with_, "cpu")), fmt(med(with_, "mb"), "%.0f")),
+                            "%s x wall, %s x CPU (target <= 1.1 x; load %.1f)" % (ratio(med(with_, "wall"), med(without, "wall")), ratio(med(with_, "cpu"), med(without, "cpu")), loads[-1]),
+                            "cementsph inject ... --volume-ml 5 [--snapshot-interval-s 1e6]"))
+    details.append("### Snapshots, 5 ml on the bundled phantom, 1 thread (medians of %d interleaved pairs; particles_NNNN.vtp are written on a second thread)\n\n%s\n" % (REPEATS, "\n".join(rows)))
+
 if want("sph"):
-    # 4. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
+    # 5. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
     sph = exe(BUILD, "SPHStepBenchmark")
     if sph:
         filt = "BM_PeriodicBox200k/(1|2)/(0|20)/" if QUICK else "BM_"
@@ -278,7 +305,7 @@ if want("sph"):
         details.append("### SPH engine step benchmark\n\nNot built (configure with -DCEMENTSPH_BUILD_BENCHMARKS=ON and build SPHStepBenchmark).\n")
 
 def peers():
-    # 5. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
+    # 6. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
     if not QUICK and want("peers"):
         drr = exe(BUILD, "drr-bench")
         if drr:

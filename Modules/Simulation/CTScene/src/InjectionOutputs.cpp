@@ -13,6 +13,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 namespace cementsph::scene::detail {
 
@@ -52,6 +53,7 @@ InjectionWriter::InjectionWriter(std::string outDir, const SceneConfig& scene, d
 }
 
 InjectionWriter::~InjectionWriter() {
+  stopWriting();
   if (finished_) return;
   for (const std::string& path : written_) {
     std::error_code ec;
@@ -71,12 +73,63 @@ void InjectionWriter::ctFrame(double time, const std::string& ctName, const std:
                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
 }
 
+void InjectionWriter::queueParticles(vtkSmartPointer<vtkPolyData> particles, std::string path) {
+  if (!particles) throw std::runtime_error(path + ": nothing to write");
+  std::unique_lock<std::mutex> lock(queueMutex_);
+  if (writeError_) std::rethrow_exception(writeError_);
+  if (!writerThread_.joinable()) writerThread_ = std::thread([this] { writeQueued(); });
+  queueChanged_.wait(lock, [this] { return queue_.size() < kQueuedSnapshots || writeError_; });
+  if (writeError_) std::rethrow_exception(writeError_);
+  written_.push_back(path); // removed by the destructor if the run fails, written or not
+  queue_.push_back({std::move(particles), std::move(path)});
+  queueChanged_.notify_all();
+}
+
+void InjectionWriter::writeQueued() {
+  std::unique_lock<std::mutex> lock(queueMutex_);
+  while (true) {
+    queueChanged_.wait(lock, [this] { return stopWriter_ || !queue_.empty(); });
+    if (stopWriter_) return;
+    QueuedPolyData job = std::move(queue_.front());
+    queue_.pop_front();
+    writingOne_ = true;
+    lock.unlock();
+    std::exception_ptr error;
+    try {
+      imaging::writePolyData(job.data, job.path);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    job.data = nullptr; // freed on this thread, outside the lock
+    lock.lock();
+    writingOne_ = false;
+    if (error && !writeError_) writeError_ = error;
+    if (writeError_) queue_.clear();
+    queueChanged_.notify_all();
+  }
+}
+
+void InjectionWriter::waitForQueuedWrites() {
+  std::unique_lock<std::mutex> lock(queueMutex_);
+  queueChanged_.wait(lock, [this] { return (queue_.empty() && !writingOne_) || writeError_; });
+  if (writeError_) std::rethrow_exception(writeError_);
+}
+
+void InjectionWriter::stopWriting() noexcept {
+  {
+    std::lock_guard<std::mutex> lock(queueMutex_);
+    stopWriter_ = true;
+    queue_.clear();
+  }
+  queueChanged_.notify_all();
+  if (writerThread_.joinable()) writerThread_.join();
+}
+
 void InjectionWriter::snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow) {
   if (!writing()) return;
   char name[64];
   std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots_.size());
-  imaging::writePolyData(particles, (fs::path(outDir_) / name).string());
-  written_.push_back((fs::path(outDir_) / name).string());
+  queueParticles(particles, (fs::path(outDir_) / name).string());
   if (ctSnapshots_) {
     char ctName[64];
     std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots_.size());
@@ -91,6 +144,8 @@ void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging:
                              const std::vector<std::pair<std::string, std::string>>& textFiles) {
   if (!writing()) return;
   snapshot(time, particles, simulatedCt);
+  waitForQueuedWrites(); // the series is whole before particles.pvd names it
+  stopWriting();
   const fs::path out(outDir_);
   imaging::writeTextAtomically((out / "particles.pvd").string(), particleCollection(snapshots_));
   imaging::writeTextAtomically((out / "tip_pressure.csv").string(), tipPressureCsv(tipSeries, baselinePa));

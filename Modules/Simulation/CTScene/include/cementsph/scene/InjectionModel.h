@@ -148,7 +148,8 @@ public:
   virtual std::string state() const = 0;
   // Cement density per ROI voxel (PorousSolid::grid order) [kg/m^3], for the simulated CT.
   virtual std::vector<double> cementDensity() const = 0;
-  // The cement as points (mm, the CT's frame) with the engine's point arrays (particles_NNNN.vtp).
+  // The cement as points (mm, the CT's frame) with the engine's point arrays (particles_NNNN.vtp). A new
+  // object on each call, not kept or changed by the engine afterwards: the driver writes it on another thread.
   virtual vtkSmartPointer<vtkPolyData> cement() const = 0;
   // The state at the end: stopped, the driver stopped it early.
   virtual void finish(bool stopped) { (void)stopped; }
