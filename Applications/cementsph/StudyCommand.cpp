@@ -56,12 +56,20 @@ std::string fmt(double x, const char* format = "%.3g") {
   return buf;
 }
 
-std::string progressLine(const study::StudyRow& r, std::size_t index, std::size_t planned, const char* what) {
+// "size 2/4: overdamped r 1.00 mm", "viscosity 1/2: overdamped r 0.57 mm, 100 Pa.s", "... (reference)".
+std::string runLabel(const study::StudyRunSpec& spec, std::size_t index, std::size_t planned) {
   std::ostringstream line;
-  line << "study " << what << " " << index << "/" << planned << ": " << r.spec.integrator << " r "
-       << study::radiusLabel(r.spec.particleRadiusMm) << " mm";
-  if (r.spec.sweep == study::StudyRunSpec::Sweep::Viscosity) line << ", " << r.spec.viscosityPaS << " Pa.s";
-  if (r.spec.reference) line << " (reference)";
+  const bool size = spec.sweep == study::StudyRunSpec::Sweep::ParticleSize;
+  line << (size ? "size " : "viscosity ") << index << "/" << planned << ": " << spec.integrator << " r "
+       << study::radiusLabel(spec.particleRadiusMm) << " mm";
+  if (!size) line << ", " << spec.viscosityPaS << " Pa.s";
+  if (spec.reference) line << " (reference)";
+  return line.str();
+}
+
+std::string progressLine(const study::StudyRow& r, std::size_t index, std::size_t planned) {
+  std::ostringstream line;
+  line << "study " << runLabel(r.spec, index, planned);
   if (!r.ok()) return line.str() + ": failed: " + r.failure;
   line << ": " << r.fluidParticles << " fluid + " << r.fixedParticles << " fixed particles, " << r.steps
        << " steps, " << fmt(r.wallTimeS) << " s wall (real-time factor " << fmt(r.realTimeFactor) << ")";
@@ -111,6 +119,9 @@ void prepare(const StudyArgs& a, const CLI::App& sub, const parallel::CaseFarm& 
   s.plan.validate();
   app::checkOutputFolder(a.out);
   s.ct = imaging::readVolume(a.ct);
+  // Every run's tip and start checks before the first run (a tip in solid is one line at once, not after a
+  // run); rank 0's check speaks for all ranks (they run the same plan on the same CT).
+  if (farm.coordinator()) study::checkRunsCanStart(s.ct, s.plan);
   const auto spacing = s.ct->GetSpacing();
   for (const std::string& note : study::runSizeNotes(s.plan, spacing[0] * spacing[1] * spacing[2], a.allowLarge))
     if (farm.coordinator()) std::cerr << "cementsph study: " << note << "\n";
@@ -145,8 +156,20 @@ int runStudy(const StudyArgs& a, const CLI::App& sub) {
   setThreads(a, farm);
   StudySession session;
   farm.agree([&] { prepare(a, sub, farm, session); });
+  const std::size_t sizePlanned = session.plan.sizeStudy ? session.plan.sizeRuns().size() : 0;
+  const std::size_t viscosityPlanned = session.plan.viscosityRuns().size();
+  // A line as each run starts, from the process that runs it (a worker rank under mpirun), so a long study
+  // shows it is working before its first result. Through std::cerr's buffer but not std::cerr itself: a
+  // worker's std::cerr is kept silent for errors (rank 0 reports those), --quiet swaps the buffer out.
+  auto announce = [&](const study::StudyRunSpec& spec, std::size_t index, std::size_t) {
+    const bool size = index < sizePlanned;
+    std::ostream line(std::cerr.rdbuf());
+    line << "study starting " << runLabel(spec, size ? index + 1 : index - sizePlanned + 1,
+                                          size ? sizePlanned : viscosityPlanned)
+         << (farm.ranks() > 1 ? " [rank " + std::to_string(farm.rank()) + "]" : std::string()) << std::endl;
+  };
   if (!farm.coordinator()) { // a worker: injections only
-    session.runner->runStudy(farm);
+    session.runner->runStudy(farm, {}, announce);
     return 0;
   }
 
@@ -160,8 +183,6 @@ int runStudy(const StudyArgs& a, const CLI::App& sub) {
     written = study::writeStudyTables(record, a.out);
   };
   int status = 0;
-  const std::size_t sizePlanned = session.plan.sizeStudy ? session.plan.sizeRuns().size() : 0;
-  const std::size_t viscosityPlanned = session.plan.viscosityRuns().size();
   session.runner->runStudy(farm, [&](const std::vector<study::StudyRow>& rows, std::size_t) {
     const study::StudyRow& last = rows.back();
     const bool size = last.spec.sweep == study::StudyRunSpec::Sweep::ParticleSize;
@@ -169,9 +190,9 @@ int runStudy(const StudyArgs& a, const CLI::App& sub) {
     into.push_back(last);
     if (!last.ok()) status = 3;
     writeTables();
-    std::cerr << progressLine(last, into.size(), size ? sizePlanned : viscosityPlanned, size ? "size" : "viscosity")
+    std::cerr << progressLine(last, into.size(), size ? sizePlanned : viscosityPlanned)
               << (farm.ranks() > 1 ? " [rank " + std::to_string(last.rank) + "]" : std::string()) << std::endl;
-  });
+  }, announce);
   writeTables();
 
   app::PictureSteps pictures("study", "the tables");

@@ -245,6 +245,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
 
   const std::unique_ptr<InjectionModel> model = entry.make();
   model->start(setup);
+  if (o.checkOnly) return InjectionResult{};
 
   const double rho0 = setup.model.restDensity;
   const double hu = o.huPerRelativeDensity;

@@ -4,12 +4,16 @@
 
 #include "cementsph/study/StudyRunner.h"
 
+#include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/sph/Simulation.h"
 
+#include "vtkSPHInjectionFilter.h"
+
 #include <itkIdentityTransform.h>
+#include <vtkImageData.h>
 
 #include <algorithm>
 #include <chrono>
@@ -18,9 +22,17 @@
 
 namespace cementsph::study {
 
+void checkRunsCanStart(const imaging::ImageType* ct, const StudyPlan& plan) {
+  scene::InjectionRunOptions check;
+  check.checkOnly = true;
+  for (const auto& runs : {plan.sizeRuns(), plan.viscosityRuns()})
+    for (const StudyRunSpec& run : runs) scene::runInjection(ct, run.scene(plan.baseScene), check);
+}
+
 StudyRunner::StudyRunner(const imaging::ImageType* ct, StudyPlan plan, StudyOptions options)
     : ct_(ct), plan_(std::move(plan)), options_(std::move(options)) {
   if (ct_ == nullptr) throw std::invalid_argument("StudyRunner: no CT");
+  ctImage_ = imaging::toVtk(ct_);
   const Eigen::Vector3d tip = *plan_.baseScene.tipMm;
   imaging::PointType p;
   for (unsigned a = 0; a < 3; ++a) p[a] = tip[int(a)];
@@ -41,19 +53,24 @@ AnalysedCement StudyRunner::analyse(const imaging::ImageType* volume) const {
 }
 
 SimulatedRun StudyRunner::simulate(const StudyRunSpec& spec) const {
-  const scene::SceneConfig scene = spec.scene(plan_.baseScene);
-  scene::InjectionRunOptions runOptions;
-  runOptions.huPerRelativeDensity = options_.huPerRelativeDensity;
+  // Through the injection filter, as `inject` runs it: its simulated CT lies on the CT's own grid (the CT's HU
+  // outside the region of interest), so analyse() takes it as it is.
+  auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
+  filter->SetInputDataObject(0, ctImage_);
+  filter->SetScene(spec.scene(plan_.baseScene));
+  filter->SetHUPerRelativeDensity(options_.huPerRelativeDensity);
   if (!options_.keepRunsDir.empty())
-    runOptions.outDir = (std::filesystem::path(options_.keepRunsDir) / spec.name()).string();
+    filter->SetOutputDirectory((std::filesystem::path(options_.keepRunsDir) / spec.name()).string());
+  filter->Update();
   SimulatedRun simulated;
   try {
-    scene::InjectionRunResult result = scene::runInjection(ct_, scene, runOptions);
-    simulated.metrics = std::move(result.metrics);
-    simulated.simulatedCt = result.simulatedCt;
+    filter->RethrowIfFailed();
   } catch (const sph::SimulationError& e) {
     simulated.failure = e.what();
+    return simulated;
   }
+  simulated.metrics = nlohmann::json::parse(filter->GetMetricsJSON());
+  simulated.simulatedCt = imaging::imageFromVtk(filter->GetSimulatedCTOutput());
   return simulated;
 }
 
@@ -101,7 +118,7 @@ StudyRow StudyRunner::run(const StudyRunSpec& spec, AnalysedCement* cement) cons
 }
 
 std::vector<StudyRow> StudyRunner::runCases(const std::vector<StudyRunSpec>& specs, parallel::CaseFarm* farm,
-                                            const RowCallback& afterEachRun) {
+                                            const RowCallback& afterEachRun, const StartCallback& beforeEachRun) {
   const bool sizeRuns = std::any_of(specs.begin(), specs.end(), [](const StudyRunSpec& s) {
     return s.sweep == StudyRunSpec::Sweep::ParticleSize;
   });
@@ -126,7 +143,10 @@ std::vector<StudyRow> StudyRunner::runCases(const std::vector<StudyRunSpec>& spe
     }
     if (afterEachRun) afterEachRun(rows, specs.size());
   };
-  auto work = [&](std::size_t i) { return encodeSimulatedRun(simulate(specs[i])); };
+  auto work = [&](std::size_t i) {
+    if (beforeEachRun) beforeEachRun(specs[i], i, specs.size());
+    return encodeSimulatedRun(simulate(specs[i]));
+  };
   if (farm) farm->run(specs.size(), work, onOutcome);
   else parallel::runCasesHere(specs.size(), work, onOutcome);
   return rows;
@@ -140,10 +160,11 @@ std::vector<StudyRow> StudyRunner::runViscositySweep(const RowCallback& afterEac
   return runCases(plan_.viscosityRuns(), nullptr, afterEachRun);
 }
 
-std::vector<StudyRow> StudyRunner::runStudy(parallel::CaseFarm& farm, const RowCallback& afterEachRun) {
+std::vector<StudyRow> StudyRunner::runStudy(parallel::CaseFarm& farm, const RowCallback& afterEachRun,
+                                            const StartCallback& beforeEachRun) {
   std::vector<StudyRunSpec> specs = plan_.sizeStudy ? plan_.sizeRuns() : std::vector<StudyRunSpec>{};
   for (const StudyRunSpec& spec : plan_.viscosityRuns()) specs.push_back(spec);
-  return runCases(specs, &farm, afterEachRun);
+  return runCases(specs, &farm, afterEachRun, beforeEachRun);
 }
 
 } // namespace cementsph::study

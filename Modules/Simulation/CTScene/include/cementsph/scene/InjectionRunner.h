@@ -53,6 +53,10 @@ struct InjectionRunOptions {
   bool cropToRegion = false;
   // Called now and then with the fraction of injection time done (0..1); return false to stop the run.
   std::function<bool(double)> onProgress;
+  // Stop once the engine has started (every check a run makes before its first step: scene, tip outside the CT
+  // or in solid, pore space, the engine's own start checks) and return an empty result; no file is written. A
+  // study checks all its runs this way before the first one starts, so bad input is one line at once.
+  bool checkOnly = false;
 };
 
 // The typed result (InjectionModel.h): summary, the engine's figures, metrics.json as written, the images.

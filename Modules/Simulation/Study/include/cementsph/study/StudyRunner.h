@@ -1,5 +1,6 @@
-// Runs a StudyPlan on one CT: each run is an injection by the inject runner (InjectionRunner.h) with the
-// run's scene; its simulated CT is put on the CT's grid and its cement segmented and measured exactly as
+// Runs a StudyPlan on one CT: each run is an injection by the injection filter (vtkSPHInjectionFilter, the
+// inject runner of InjectionRunner.h as a VTK algorithm, as `inject` runs it) with the run's scene; its
+// simulated CT (the filter's output 0, on the CT's own grid) has its cement segmented and measured exactly as
 // `cementsph compare` does (AnalysedCement: post minus pre above 500 HU, the component at the tip, the
 // isosurface after a 1-voxel Gaussian); then scored against the reference (CementErrors), which is either
 // the size study's finest run (StudyPlan) or a post-operative CT's cement set with setReference().
@@ -8,7 +9,8 @@
 //
 // A run whose engine goes unstable (sph::SimulationError) is kept as a failed row and the study goes on;
 // so is a run that failed for any other reason but bad input (its failure says why). Bad input (a bad
-// scene, a tip in solid: std::invalid_argument) stops the study and is thrown.
+// scene, a tip in solid: std::invalid_argument) stops the study and is thrown; checkRunsCanStart finds it
+// before the first run starts.
 //
 // The runs may be spread over the ranks of an MPI job (parallel::CaseFarm): each injection runs on a worker
 // rank, which sends back its metrics and simulated CT (SimulatedRun, encoded as bytes); rank 0 segments,
@@ -23,11 +25,14 @@
 #include "cementsph/study/StudyRow.h"
 
 #include <nlohmann/json.hpp>
+#include <vtkSmartPointer.h>
 
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
+
+class vtkImageData;
 
 namespace cementsph::parallel {
 class CaseFarm;
@@ -46,6 +51,11 @@ struct SimulatedRun {
 std::string encodeSimulatedRun(const SimulatedRun& run);
 SimulatedRun decodeSimulatedRun(const std::string& bytes);
 
+// Every check each run of the plan makes before its first step (its scene; the tip outside the CT, in solid or
+// without the pore space to inject into; the engine's own start checks), all runs before any starts: throws
+// the first run's std::invalid_argument, as that run would. The plan must be validated.
+void checkRunsCanStart(const imaging::ImageType* ct, const StudyPlan& plan);
+
 struct StudyOptions {
   // Segmentation of every cement (the injection point is set to the scene's tip).
   imaging::SegmentationOptions segmentation;
@@ -59,6 +69,9 @@ class StudyRunner {
 public:
   // Called after every run with the rows so far and the number of runs planned.
   using RowCallback = std::function<void(const std::vector<StudyRow>& rows, std::size_t planned)>;
+  // Called as a run starts, in the process that runs it (a worker rank under MPI), with the run, its index
+  // in the list of cases (runStudy: the size study's runs, then the sweep's) and the number of cases.
+  using StartCallback = std::function<void(const StudyRunSpec& run, std::size_t index, std::size_t planned)>;
 
   // The plan must be validated; ct must outlive the runner.
   StudyRunner(const imaging::ImageType* ct, StudyPlan plan, StudyOptions options = {});
@@ -72,7 +85,8 @@ public:
   std::vector<StudyRow> runViscositySweep(const RowCallback& afterEachRun = {});
   // Both, the size study's runs first, as one list of cases over the farm's ranks (every rank calls it).
   // On rank 0: every row, in plan order, each to afterEachRun as it is scored; on a worker: nothing.
-  std::vector<StudyRow> runStudy(parallel::CaseFarm& farm, const RowCallback& afterEachRun = {});
+  std::vector<StudyRow> runStudy(parallel::CaseFarm& farm, const RowCallback& afterEachRun = {},
+                                 const StartCallback& beforeEachRun = {});
 
   // One run, measured; its cement is handed back in `cement` when given.
   StudyRow run(const StudyRunSpec& spec, AnalysedCement* cement = nullptr) const;
@@ -89,9 +103,10 @@ public:
 
 private:
   std::vector<StudyRow> runCases(const std::vector<StudyRunSpec>& specs, parallel::CaseFarm* farm,
-                                 const RowCallback& afterEachRun);
+                                 const RowCallback& afterEachRun, const StartCallback& beforeEachRun = {});
 
   const imaging::ImageType* ct_;
+  vtkSmartPointer<vtkImageData> ctImage_; // ct_ as the injection filter's input, converted once
   StudyPlan plan_;
   StudyOptions options_;
   std::optional<AnalysedCement> reference_;
