@@ -695,8 +695,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   for (const auto& e : inflow) inflowSum += e.second;
   const double scale = inflowSum > 0 ? flowRate / inflowSum : 0.0;
   std::vector<std::pair<std::size_t, double>> excess;
+  inflow_.clear();
   for (const auto& [c, q] : inflow) {
     if (q <= 0) continue;
+    inflow_.push_back({c, q * scale});
     wet(c);
     fill_[c] += q * scale * dt / poreVolume(c);
     if (fill_[c] > 1.0) excess.push_back({c, (fill_[c] - 1.0) * poreVolume(c)});

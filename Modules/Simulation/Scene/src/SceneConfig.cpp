@@ -128,7 +128,8 @@ const std::set<std::string>& sceneKeyNames() {
       "curing_model", "curing_time_s", "cured_viscosity_pa_s", "curing_reference_time_s", "bone_model",
       "marrow_hu", "bone_tissue_hu", "kozeny_carman_diameter_mm", "cortical_hu", "soft_tissue_max_hu",
       "soft_tissue_permeability_m2", "stop_at_first_leak", "allow_tip_outside_bone", "labels_path",
-      "label_table", "second_tip_withdrawal_mm", "second_tip_volume_ml", "cannula_gauge"};
+      "label_table", "second_tip_withdrawal_mm", "second_tip_volume_ml", "cannula_gauge",
+      "contact_angle_deg"};
   return names;
 }
 
@@ -214,6 +215,8 @@ void applySceneJson(SceneConfig& s, const json& j) {
       s.porePermeabilityM2 = number(v, key);
     } else if (key == "capillary_tension_n_per_m") {
       s.capillaryTensionNPerM = number(v, key);
+    } else if (key == "contact_angle_deg") {
+      s.contactAngleDeg = number(v, key);
     } else if (key == "viscosity_law") {
       s.viscosityLaw = text(v, key);
       if (s.viscosityLaw != "newtonian" && s.viscosityLaw != "power-law" && s.viscosityLaw != "carreau")
@@ -377,6 +380,11 @@ void SceneConfig::validate() const {
   (void)curing(); // the curing keys, each error naming its key
   if (!(capillaryTensionNPerM >= 0) || !std::isfinite(capillaryTensionNPerM) || capillaryTensionNPerM > 1.0)
     fail("capillary_tension_n_per_m", "must be in [0, 1] N/m (0: no capillary entry)");
+  // Measured through the displaced fluid (marrow): below 90 degrees the cement is the non-wetting phase and must be
+  // pushed into a throat; at or above 90 it would be drawn in (imbibition), which the entry model does not describe.
+  if (!(contactAngleDeg >= 0 && contactAngleDeg < 90) || !std::isfinite(contactAngleDeg))
+    fail("contact_angle_deg", "must be in [0, 90) degrees (measured through the marrow; 0: the largest entry "
+                              "pressure; 90 or more would make the cement the wetting phase, not modelled)");
   auto requireWithin = [](const std::optional<double>& x, double lo, double hi, const char* key, const char* unit) {
     if (x && !(*x >= lo && *x <= hi)) {
       std::ostringstream what;
@@ -540,6 +548,7 @@ json toJson(const SceneConfig& s) {
   j["pressure_model"] = s.pressureModel;
   if (s.porePermeabilityM2) j["pore_permeability_m2"] = *s.porePermeabilityM2;
   j["capillary_tension_n_per_m"] = s.capillaryTensionNPerM;
+  j["contact_angle_deg"] = s.contactAngleDeg;
   j["viscosity_law"] = s.viscosityLaw;
   if (s.viscosityLaw == "power-law") {
     j["consistency_pa_s_n"] = s.rheology.consistencyPaSn;

@@ -40,6 +40,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cementsph::voxeldarcy {
@@ -182,6 +183,12 @@ public:
   Eigen::Vector3d darcyVelocity(std::size_t c) const;
   // Pore-volume weighted mean pressure of the source voxels (the pressure the cannula works against) [Pa].
   double sourcePressure() const;
+  // The last step's inflow into each front voxel that took cement (voxel, m^3/s; a voxel once, in voxel
+  // order; scaled so that the inflows add up to the flow rate): where the cement was going, e.g. the share of
+  // it leaving the bone (the driver's leak-risk figure).
+  const std::vector<std::pair<std::size_t, double>>& frontInflow() const { return inflow_; }
+  // The capillary entry pressure of each voxel [Pa] (empty: none; setEntryPressure).
+  const std::vector<float>& entryPressure() const { return entryPressure_; }
   const FillingStatistics& statistics() const { return stats_; }
 
 private:
@@ -207,6 +214,7 @@ private:
   std::vector<int> unknown_; // voxel -> unknown index or -1
   std::vector<float> entryPressure_;  // per voxel [Pa]; empty: no capillary entry
   std::vector<std::uint8_t> barred_;  // front voxel held back by its entry pressure this step
+  std::vector<std::pair<std::size_t, double>> inflow_; // the last step's inflow per front voxel [m^3/s]
   std::function<double(double)> shearLaw_;
   double flowIndex_ = 1.0;
   int picardIterations_ = 1;

@@ -78,8 +78,12 @@
 //                                   cannula is withdrawn this far along its axis (the tract it leaves opens to
 //                                   the cement) and the last second_tip_volume_ml goes in there   none
 //   capillary_tension_n_per_m       voxel-darcy: interfacial tension sigma of cement against the displaced
-//                                   fluid; > 0 gives each pore voxel a capillary entry pressure 2 sigma / r
-//                                   (r its distance to the solid; VALIDATION.md, the viscosity trend)     0 (off)
+//                                   fluid; > 0 gives each pore voxel a capillary entry pressure
+//                                   2 sigma cos(theta) / r (r: its distance to the solid on a pore-resolved CT,
+//                                   the capillary-bundle throat sqrt(8 k / phi) on continuum bone;
+//                                   VoxelDarcyInjectionModel.cpp, VALIDATION.md, the viscosity trend)     0 (off)
+//   contact_angle_deg               voxel-darcy: the cement/marrow/bone contact angle theta, measured
+//                                   through the marrow, [0, 90)                                0 (cos = 1)
 // Errors (unknown key, null value, wrong type, out of range, missing tip) are std::invalid_argument with one
 // line naming the key.
 #pragma once
@@ -128,7 +132,8 @@ struct SceneConfig {
   std::optional<double> fixedFieldSpacingOverH, maxDisplacementOverH, neighbourSkinOverH;
   std::string pressureModel = "auto";
   std::optional<double> porePermeabilityM2; // voxel-darcy: permeability of a resolved pore voxel [m^2]
-  double capillaryTensionNPerM = 0.0;       // voxel-darcy: capillary entry 2 sigma / r at the front; 0 off
+  double capillaryTensionNPerM = 0.0;       // voxel-darcy: capillary entry 2 sigma cos(theta) / r at the front; 0 off
+  double contactAngleDeg = 0.0;             // voxel-darcy: theta of the capillary entry, through the marrow [deg]
   // Rheology (voxel-darcy; sph::Rheology): the law, its parameters (the Newtonian law takes the viscosity
   // schedule above), bounds, and the curing factor over time since mixing.
   std::string viscosityLaw = "newtonian";
