@@ -13,6 +13,7 @@
 #include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/planning/InjectionPlanner.h"
 #include "cementsph/planning/PlanOutputs.h"
+#include "cementsph/planning/PlanTrajectory.h"
 #include "cementsph/rendering/CementSlices.h"
 #include "cementsph/rendering/XYPlot.h"
 #include "cementsph/scene/InjectionRunner.h"
@@ -31,12 +32,12 @@ namespace {
 namespace fs = std::filesystem;
 
 struct PlanArgs {
-  std::string ct, scene, out;
+  std::string ct, scene, out, labels;
   std::vector<double> entry, direction, target;
   double targetRadiusMm = 5, minDepthMm = 0, maxDepthMm = 20, minVolumeMl = 0.5, maxVolumeMl = 4;
   double maxSyringeMpa = 3.0, maxLeakageMl = 0.0, volumeCostPerMl = 0.01;
   int maxEvaluations = 40, starts = 3, threads = 0;
-  bool quiet = false, secondTip = false;
+  bool quiet = false, secondTip = false, allowCanalCrossing = false, maxDepthGiven = false;
 };
 
 Eigen::Vector3d vec(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
@@ -49,11 +50,20 @@ planning::PlanRequest planRequest(const PlanArgs& a) {
   scene::SceneSettings entryAsTip;
   entryAsTip.tipMm = {a.entry[0], a.entry[1], a.entry[2]};
   r.scene = scene::loadSceneFile(a.scene, entryAsTip);
+  if (!a.labels.empty()) {
+    r.scene.labelsPath = a.labels;
+    r.scene.explicitKeys.insert("labels_path");
+  }
   r.entryMm = vec(a.entry);
-  r.direction = vec(a.direction);
-  r.minDepthMm = a.minDepthMm;
-  r.maxDepthMm = a.maxDepthMm;
   r.targetCentreMm = vec(a.target);
+  // Without --direction the trajectory is the entry -> target line, and the deepest tip the target itself
+  // unless --max-depth-mm says otherwise.
+  r.direction = a.direction.empty() ? Eigen::Vector3d(r.targetCentreMm - r.entryMm) : vec(a.direction);
+  if (a.direction.empty() && !(r.direction.norm() > 0))
+    throw std::invalid_argument("--entry-mm and --target-mm are the same point: give the trajectory a length or a --direction");
+  r.minDepthMm = a.minDepthMm;
+  r.maxDepthMm = a.direction.empty() && !a.maxDepthGiven ? r.direction.norm() : a.maxDepthMm;
+  r.allowCanalCrossing = a.allowCanalCrossing;
   r.targetRadiusMm = a.targetRadiusMm;
   r.minVolumeMl = a.minVolumeMl;
   r.maxVolumeMl = a.maxVolumeMl;
@@ -122,7 +132,13 @@ int runPlan(const PlanArgs& a) {
     r = planRequest(a);
     image = imaging::readVolume(a.ct);
     r.validate(image); // before anything is written
+    // The shaft against the anatomy, once: through the canal it is refused here, one line, nothing written.
+    r.trajectoryCheck = planning::checkPlanTrajectory(image, r);
+    planning::requireASafeTrajectory(*r.trajectoryCheck, r);
   });
+  if (farm.coordinator() && r.trajectoryCheck->verdict != "clear")
+    std::cerr << "plan: warning: " << r.trajectoryCheck->message
+              << (r.trajectoryCheck->refused() ? " (allowed by --allow-canal-crossing)" : "") << "\n";
   const planning::PlanResult plan = planning::planInjection(
       image, r, [&](const planning::PlanEvaluation& e) { if (!a.quiet) printEvaluation(e); }, &farm);
   if (!farm.coordinator()) return 0; // a worker: its starts went to rank 0
@@ -149,10 +165,24 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
   sub.add_option("--ct", a->ct, "CT volume in HU (file or DICOM directory)")->required();
   sub.add_option("--scene", a->scene, "Scene file: cement, rate, viscosity, model keys (tip and volume are planned)")->required();
   sub.add_option("--out", a->out, "Output directory (plan.json, plan.csv, convergence.png, best/)")->required();
-  sub.add_option("--entry-mm", a->entry, "Trajectory entry point x,y,z in mm (the CT's LPS frame)")->delimiter(',')->expected(3)->required();
-  sub.add_option("--direction", a->direction, "Trajectory direction x,y,z, into the bone")->delimiter(',')->expected(3)->required();
+  sub.add_option("--entry-mm", a->entry,
+                 "Trajectory entry point x,y,z in mm (the CT's LPS frame); the shaft from it is checked against the "
+                 "anatomy (pedicle, canal, disc, cortex) before any injection runs")
+      ->delimiter(',')->expected(3)->required();
+  sub.add_option("--direction", a->direction,
+                 "Trajectory direction x,y,z, into the bone (default: from --entry-mm towards --target-mm)")
+      ->delimiter(',')->expected(3);
   sub.add_option("--min-depth-mm", a->minDepthMm, "Shallowest tip along the trajectory (mm from the entry)");
-  sub.add_option("--max-depth-mm", a->maxDepthMm, "Deepest tip along the trajectory (mm from the entry)");
+  sub.add_option("--max-depth-mm", a->maxDepthMm,
+                 "Deepest tip along the trajectory (mm from the entry; default 20, or the target's distance without "
+                 "--direction)")
+      ->each([a](const std::string&) { a->maxDepthGiven = true; });
+  sub.add_option("--labels", a->labels,
+                 "Label map on the CT's grid (TotalSegmentator, 3D Slicer) for the trajectory check and the "
+                 "leakage, instead of the CT bone rule (scene key labels_path; label_table says which label is what)");
+  sub.add_flag("--allow-canal-crossing", a->allowCanalCrossing,
+               "Plan even when the shaft crosses the spinal canal (refused otherwise); the crossing stays a "
+               "warning in plan.json and on stderr");
   sub.add_option("--target-mm", a->target, "Target sphere centre x,y,z in mm")->delimiter(',')->expected(3)->required();
   sub.add_option("--target-radius-mm", a->targetRadiusMm, "Target sphere radius in mm");
   sub.add_option("--min-volume-ml", a->minVolumeMl, "Smallest volume to consider (ml)");

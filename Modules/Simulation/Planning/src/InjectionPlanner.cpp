@@ -1,6 +1,7 @@
 #include "cementsph/planning/InjectionPlanner.h"
 
 #include "cementsph/parallel/CaseFarm.h"
+#include "cementsph/planning/PlanTrajectory.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include <nlopt.h>
@@ -194,6 +195,13 @@ void PlanRequest::validate(const imaging::ImageType* ct) const {
                                 "): at least " + std::to_string(perStart * starts));
 }
 
+void requireASafeTrajectory(const anatomy::TrajectoryCheck& check, const PlanRequest& r) {
+  if (check.refused() && !r.allowCanalCrossing)
+    throw std::invalid_argument("plan: " + check.message +
+                                ": a cannula must not pass the spinal canal; move --entry-mm lateral to the canal "
+                                "(through the pedicle), or pass --allow-canal-crossing if the path is deliberate");
+}
+
 double targetCoverage(vtkPolyData* points, const Eigen::Vector3d& centre, double radius) {
   if (!points) return 0.0;
   auto* volume = points->GetPointData()->GetArray("cement_volume_mm3");
@@ -215,6 +223,8 @@ PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& r,
   r.validate(ct);
   PlanResult result;
   result.mpiRanks = farm ? farm->ranks() : 1;
+  result.trajectory = r.trajectoryCheck ? *r.trajectoryCheck : checkPlanTrajectory(ct, r);
+  requireASafeTrajectory(result.trajectory, r);
   auto work = [&](std::size_t start) { return runStart(ct, r, int(start)).dump(); };
   auto onOutcome = [&](const parallel::CaseOutcome& outcome) {
     PlanStart start;
@@ -298,6 +308,7 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
         << second->coverage << (second->withinLimits ? "" : ", outside the limits") << ") scored " << second->objective;
   return {{"best", best.toJson()},
           {"why_best", why.str()},
+          {"trajectory_check", trajectory.toJson()},
           {"objective", "coverage - volume_cost_per_ml x volume_ml - 5 x (syringe excess / limit + leakage excess / 0.1 ml)"},
           {"evaluations", evaluationsJson},
           {"stop_reason", stopReason},
@@ -315,7 +326,8 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
             {"volume_cost_per_ml", r.volumeCostPerMl},
             {"max_evaluations", r.maxEvaluations},
             {"starts", r.starts},
-            {"second_tip", r.secondTip}}},
+            {"second_tip", r.secondTip},
+            {"allow_canal_crossing", r.allowCanalCrossing}}},
           {"mpi_ranks", mpiRanks},
           {"frame", "the CT's patient frame, LPS mm"}};
 }

@@ -27,6 +27,7 @@
 // worker ranks (parallel::CaseFarm), with the same evaluations as one process makes one after another.
 #pragma once
 
+#include "cementsph/anatomy/Trajectory.h"
 #include "cementsph/imaging/ImageTypes.h"
 #include "cementsph/scene/SceneConfig.h"
 
@@ -35,6 +36,7 @@
 #include <nlohmann/json.hpp>
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -57,6 +59,10 @@ struct PlanRequest {
   int maxEvaluations = 40;                      // over all starts
   int starts = 3;                               // independent BOBYQA starts along the trajectory
   bool secondTip = false;                       // also plan a second, shallower tip on the trajectory
+  // The trajectory against the anatomy (PlanTrajectory.h): computed once before the plan (planInjection does it
+  // when absent). A shaft through the spinal canal is refused unless allowCanalCrossing (a deliberate path).
+  std::optional<anatomy::TrajectoryCheck> trajectoryCheck;
+  bool allowCanalCrossing = false;
   int parameters() const { return secondTip ? 4 : 2; }
   // Throws std::invalid_argument (one line naming the option) for bounds out of order, a zero direction,
   // a target or trajectory that leaves the CT.
@@ -98,15 +104,22 @@ struct PlanResult {
   std::vector<PlanStart> starts;
   std::string stopReason;                   // the best plan's start's
   int mpiRanks = 1;
+  anatomy::TrajectoryCheck trajectory;      // the shaft against the anatomy (PlanTrajectory.h)
   nlohmann::json toJson(const PlanRequest& request) const;
   std::string csv() const; // one row per evaluation
 };
+
+// Throws std::invalid_argument (one line: the crossing and what to do) for a shaft through the spinal canal
+// unless request.allowCanalCrossing.
+void requireASafeTrajectory(const anatomy::TrajectoryCheck& check, const PlanRequest& request);
 
 // The fraction of a sphere's volume covered by the cement points of an injection (VoxelDarcyInjectionModel.cpp's
 // particles: cement_volume_mm3, fill_fraction and porosity per voxel centre).
 double targetCoverage(vtkPolyData* cementVoxels, const Eigen::Vector3d& centreMm, double radiusMm);
 
 // Every rank of an MPI job calls it (farm: parallel::caseFarm()); the result is complete on rank 0 only.
+// Throws std::invalid_argument (one line) for a request that fails validate() or a trajectory through the
+// spinal canal (unless allowCanalCrossing).
 // onEvaluation sees each evaluation on rank 0, a start's all at once as that start comes in.
 PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& request,
                          const std::function<void(const PlanEvaluation&)>& onEvaluation = {},
