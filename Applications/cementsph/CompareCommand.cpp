@@ -15,6 +15,7 @@
 #include "cementsph/rendering/SliceComparison.h"
 #include "cementsph/rendering/SurfaceComparison.h"
 #include "cementsph/study/CementComparison.h"
+#include "cementsph/study/ScanProvenance.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -30,8 +31,9 @@ namespace fs = std::filesystem;
 using cementsph::study::CementComparison;
 
 // slices.png: axial slices through the segmented cement (either one), every 5 mm as in the paper's Fig. 11.
-void drawSlices(const CementComparison& c, double injectionZMm, const fs::path& png) {
+void drawSlices(const CementComparison& c, double injectionZMm, const std::string& postLabel, const fs::path& png) {
   cementsph::rendering::SliceComparisonOptions options;
+  options.postRowName = postLabel;
   double lo = 1e300, hi = -1e300;
   for (vtkPolyData* surface : {c.ct.surface.Get(), c.sim ? c.sim->surface.Get() : nullptr}) {
     if (surface == nullptr) continue;
@@ -48,13 +50,15 @@ void drawSlices(const CementComparison& c, double injectionZMm, const fs::path& 
 }
 
 // surfaces.png: the CT and simulated isosurfaces and the distance between them (Fig. 7).
-void drawSurfaces(const CementComparison& c, const std::string& simulatedPath, const fs::path& png) {
+void drawSurfaces(const CementComparison& c, const std::string& simulatedPath, const std::string& postLabel,
+                  const fs::path& png) {
   // `inject`'s label map beside the simulated CT (continuum bone): leaked cement red.
   cementsph::rendering::SurfaceComparisonOptions options;
   const fs::path labelsFile = fs::path(simulatedPath).parent_path() / "cement_labels.nrrd";
   const auto labelsItk = fs::exists(labelsFile) ? cementsph::imaging::readVolume(labelsFile.string()) : nullptr;
   const auto labels = labelsItk ? cementsph::imaging::toVtk(labelsItk.GetPointer()) : nullptr;
   options.simulationLabels = labels;
+  options.postTitle = postLabel;
   cementsph::rendering::renderSurfaceComparison(c.ct.surface, c.sim->surface, png, options);
 }
 
@@ -151,13 +155,15 @@ int runCompare(const CompareRequest& a, nlohmann::json* metrics) {
 
   // Pictures, after metrics.json so a rendering failure never loses the numbers.
   PictureSteps pictures("compare", "metrics");
+  // The post scan named by what it is (a phantom's is simulated, never "experiment"): ScanProvenance.h.
+  const std::string postLabel = study::postScanLabel(a.post);
   if (!a.noPictures) {
     pictures.drawAndAnnounce("slices.png", out / "slices.png", [&](const fs::path& png) {
-      drawSlices(comparison, a.injection[2], png);
+      drawSlices(comparison, a.injection[2], postLabel, png);
     });
     if (comparison.surfaces)
       pictures.drawAndAnnounce("surfaces.png", out / "surfaces.png", [&](const fs::path& png) {
-        drawSurfaces(comparison, a.simulated, png);
+        drawSurfaces(comparison, a.simulated, postLabel, png);
       });
   }
   // Which off-screen backend drew the pictures (OSMesa, surfaceless EGL or an X display), in metrics.json.

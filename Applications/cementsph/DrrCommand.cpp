@@ -1,7 +1,8 @@
 // `cementsph drr`: a digitally reconstructed radiograph of a CT volume with plastimatch's geometry and
 // HU-to-attenuation conventions (so `plastimatch drr -i exact` images compare pixel for pixel).
 // Writes DIR/drr.nrrd (float line integrals / 10, the numbers) and DIR/drr.png (8-bit picture,
-// window [0, max]); neither needs a display or a GL context. A thin layer over CementSPH::DRR and
+// window [0, max], dense matter dark as in every X-ray picture the program writes); neither needs a display
+// or a GL context. A thin layer over CementSPH::DRR and
 // CementSPH::ImagingIO. Everything is checked and computed before anything is written, and each file
 // is written atomically.
 #include "CommandRegistry.h"

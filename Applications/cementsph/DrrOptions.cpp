@@ -92,10 +92,14 @@ void writeDrrPng(vtkImageData* drr, const std::string& path, double windowMax) {
   double range[2];
   drr->GetPointData()->GetScalars()->GetRange(range, 0);
   const double top = windowMax > 0.0 ? windowMax : range[1];
+  // One convention in every X-ray picture the program writes (drr.png, the sequences' frames, xray_frames.png
+  // of XrayFramesPicture.h): dense matter dark, as a C-arm monitor shows it: grey = 255 (1 - value / top),
+  // clamped. All air (top 0) is white.
+  const double window = top > 0.0 ? top : 1.0;
   vtkNew<vtkImageShiftScale> toBytes;
   toBytes->SetInputData(drr);
-  toBytes->SetShift(0.0);
-  toBytes->SetScale(top > 0.0 ? 255.0 / top : 0.0);
+  toBytes->SetShift(-window);
+  toBytes->SetScale(-255.0 / window);
   toBytes->SetOutputScalarTypeToUnsignedChar();
   toBytes->ClampOverflowOn();
   imaging::writeAtomically(path, [&](const std::string& tmp) {

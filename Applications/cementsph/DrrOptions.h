@@ -47,7 +47,8 @@ drr::DRRGeometry geometryForVolume(const DrrGeometryArgs& args, const std::array
 vtkSmartPointer<vtkImageData> viewAsVtk(const imaging::ImageType* volume);
 
 // A DRR as an 8-bit picture, written atomically: line integrals mapped linearly from [0, windowMax] to
-// [0, 255] (dense = bright, as a radiograph film); windowMax <= 0: the image's own maximum.
+// [255, 0] (dense = dark, as a C-arm monitor shows it and as xray_frames.png draws it: one convention in every
+// X-ray picture); windowMax <= 0: the image's own maximum.
 void writeDrrPng(vtkImageData* drr, const std::string& path, double windowMax = 0.0);
 // `cementsph drr`'s files: creates the folder out, writes out/drr.nrrd (float, uncompressed: deflate would cost
 // ~0.04 s of a 0.5 s run) and out/drr.png. If a write fails, what this call made goes again (the numbers, and

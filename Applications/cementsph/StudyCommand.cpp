@@ -4,7 +4,7 @@
 // `compare` does and scored against the reference: the finest run (smallest radius, most faithful
 // integrator) or a post-operative CT. Writes DIR/study.csv (rewritten after every run, so an interrupted
 // study keeps what it finished), study.md, study.json, error_vs_wall_time.png and, with --viscosities-pa-s,
-// spreading_vs_viscosity.csv and .png. A thin layer over CementSPH::Study (Modules/Simulation/Study).
+// spreading_vs_viscosity.csv and .png (Fig. 8) and end_pressure_vs_viscosity.png (Fig. 9, simulated half). A thin layer over CementSPH::Study (Modules/Simulation/Study).
 // A thin layer: the reference, the run-size notes and the tables' schemas are CementSPH::Study's
 // (StudyOutputs.h); this file parses the options, runs the plan and prints the progress and summary.
 // AlignedPost.h (ITK transforms, with ITK's bundled Eigen Geometry) must come before the system Eigen of
@@ -144,6 +144,9 @@ std::vector<std::string> drawPictures(const StudyArgs& a, const study::StudyReco
   if (!a.noPictures && !record.viscosityRows.empty())
     pictures.draw("spreading_vs_viscosity.png", out / "spreading_vs_viscosity.png",
                   [&](const fs::path& png) { study::writeSpreadingVsViscosityPlot(record.viscosityRows, png); });
+  if (!a.noPictures && !record.viscosityRows.empty())
+    pictures.draw("end_pressure_vs_viscosity.png", out / "end_pressure_vs_viscosity.png",
+                  [&](const fs::path& png) { study::writeEndPressureVsViscosityPlot(record.viscosityRows, png); });
   return pictures.written();
 }
 
@@ -173,7 +176,8 @@ int runStudy(const StudyArgs& a, const CLI::App& sub) {
     return 0;
   }
 
-  // 2. The runs; after each, every table is rewritten (atomically) and one progress line printed.
+  // 2. The runs: a line as each starts (announce) and, after each, every table rewritten (atomically) and one
+  // progress line with its figures.
   study::StudyRecord record{a.ct, a.scene, a.referenceCt, &session.plan, session.reference,
                             imaging::describeThresholdRule(session.options.segmentation), omp_get_max_threads(),
                             farm.ranks(), {}, {}, 0.0};
@@ -221,8 +225,8 @@ cementsph::app::CommandRunner setupStudy(CLI::App& sub) {
       ->capture_default_str();
   sub.add_flag("--no-size-study", a->noSizeStudy, "Run only the viscosity sweep");
   sub.add_option("--viscosities-pa-s", a->viscositiesPaS,
-                 "Also sweep these viscosities, Pa.s, at the scene's radius and integrator (paper Fig. 8): "
-                 "spreading_vs_viscosity.csv and .png")
+                 "Also sweep these viscosities, Pa.s, at the scene's radius and integrator (paper Figs. 8, 9): "
+                 "spreading_vs_viscosity.csv and .png, end_pressure_vs_viscosity.png")
       ->delimiter(',');
   sub.add_option("--reference-ct", a->referenceCt,
                  "Score against this post-operative CT (registered onto --ct as compare does) instead of the "

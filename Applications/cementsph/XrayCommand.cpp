@@ -31,6 +31,7 @@
 #include "cementsph/rendering/RenderBackend.h"
 #include "cementsph/rendering/ProjectedAreaPlot.h"
 #include "cementsph/rendering/XrayFramesPicture.h"
+#include "cementsph/study/ScanProvenance.h"
 
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
@@ -51,6 +52,7 @@ namespace {
 
 namespace fs = std::filesystem;
 namespace drr = cementsph::drr;
+namespace study = cementsph::study;
 namespace rendering = cementsph::rendering;
 using cementsph::app::XrayRequest;
 
@@ -148,11 +150,13 @@ void computeSequences(const XrayRequest& a, XrayRun& run) {
 }
 
 // xray_frames.png: the sequence's frames (at most maxColumns) above the reference frames they matched.
-void drawFrames(const XrayRun& run, int maxColumns, const fs::path& png) {
+// The reference row is named by what its volumes are (ScanProvenance.h): a phantom's scans are simulated.
+void drawFrames(const XrayRun& run, int maxColumns, const std::string& referenceLabel, const fs::path& png) {
   const drr::XraySequence& sequence = *run.sequence;
   std::vector<std::string> labels;
   rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, cementsph::app::drrWindow(sequence)};
-  rendering::XrayFramesRow refRow{"reference", {}, kReferenceRgb, run.reference ? cementsph::app::drrWindow(*run.reference) : 0.0};
+  rendering::XrayFramesRow refRow{referenceLabel, {}, kReferenceRgb,
+                                  run.reference ? cementsph::app::drrWindow(*run.reference) : 0.0};
   for (std::size_t k : pictureColumns(sequence.frames().size(), maxColumns)) {
     const auto& f = sequence.frames()[k];
     labels.push_back(timeLabel(f.timeS));
@@ -170,14 +174,14 @@ void drawFrames(const XrayRun& run, int maxColumns, const fs::path& png) {
 }
 
 // projected_area.png: the projected cement area over time.
-void drawProjectedArea(const XrayRun& run, const fs::path& png) {
+void drawProjectedArea(const XrayRun& run, const std::string& referenceLabel, const fs::path& png) {
   std::vector<rendering::ProjectedAreaSeries> series;
   const drr::XraySequence* sequence = &*run.sequence;
   const drr::XraySequence* ref = run.reference ? &*run.reference : nullptr;
   for (const drr::XraySequence* s : {sequence, ref}) {
     if (s == nullptr) continue;
     // The reference's frames are measured instants: markers only (a line would invent values between).
-    rendering::ProjectedAreaSeries curve{s == sequence ? "simulation" : "reference", {}, {},
+    rendering::ProjectedAreaSeries curve{s == sequence ? "simulation" : referenceLabel, {}, {},
                                          s == sequence ? kSequenceRgb : kReferenceRgb, s == sequence};
     for (const auto& f : s->frames()) {
       curve.timeS.push_back(f.timeS);
@@ -296,11 +300,13 @@ int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
   // Pictures after the numbers; a failed picture is one line and exit status 3, as in `compare`.
   t = std::chrono::steady_clock::now();
   PictureSteps pictures("xray");
+  const std::string referenceLabel =
+      run.referenceFrames ? study::referenceScansLabel(run.referenceFrames->paths) : std::string("reference");
   if (!a.noPictures) {
     pictures.draw("xray_frames.png", dir / "xray_frames.png",
-                  [&](const fs::path& png) { drawFrames(run, a.maxColumns, png); });
+                  [&](const fs::path& png) { drawFrames(run, a.maxColumns, referenceLabel, png); });
     pictures.draw("projected_area.png", dir / "projected_area.png",
-                  [&](const fs::path& png) { drawProjectedArea(run, png); });
+                  [&](const fs::path& png) { drawProjectedArea(run, referenceLabel, png); });
   }
   record.pictureSeconds = secondsSince(t);
   record.pictures = pictures.written();

@@ -131,7 +131,7 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
 
   detail::PixelCanvas canvas(width, height, {255, 255, 255});
   const double span = options.windowHighHU - options.windowLowHU;
-  const char* const rowNames[2] = {"post-op CT", "simulated CT"};
+  const std::string rowNames[2] = {options.postRowName, "simulated CT"};
   for (std::size_t r = 0; r < rows.size(); ++r) {
     vtkImageData* v = rows[r];
     const detail::PanelAxes& q = views[r];

@@ -146,7 +146,7 @@ void renderSurfaceComparison(vtkPolyData* experiment, vtkPolyData* simulation, c
     middle->AddActor(plainActor(simulation, 0.55, 0.70, 0.90));
     addTitle(middle, "simulation");
   }
-  addTitle(left, "experiment (CT)");
+  addTitle(left, options.postTitle);
   addTitle(right, "simulation: distance to CT surface");
 
   // Sequential table (white-yellow-red, like the paper's 0 -> large error colouring): distance is >= 0,

@@ -111,6 +111,49 @@ rendering::PlotSpec spreadingVsViscositySpec(const std::vector<StudyRow>& rows) 
   return spec;
 }
 
+rendering::PlotSpec endPressureVsViscositySpec(const std::vector<StudyRow>& rows) {
+  // Normalised by the largest end pressure of the sweep, as the paper's Fig. 9 normalises its pressures: the
+  // figure compares how pressure rises with viscosity, which a model's absolute pressure scale does not change.
+  double largest = 0.0, maxViscosity = 0.0;
+  for (const StudyRow& r : rows)
+    if (r.ok() && std::isfinite(r.finalTipPressurePa)) largest = std::max(largest, r.finalTipPressurePa);
+  if (!(largest > 0.0)) throw std::runtime_error("end_pressure_vs_viscosity: no run ended with a positive outlet pressure");
+  rendering::PlotSpec spec;
+  // One series, so XYPlot draws no legend: the title says what it is (simulated; no experiment here).
+  spec.title = "Simulated outlet pressure at the end of injection, normalised (paper Fig. 9)";
+  spec.xLabel = "viscosity (Pa.s)";
+  spec.yLabel = "end pressure / largest end pressure";
+  PlotSeries simulated;
+  simulated.name = "simulated (this study; no experiment given)";
+  simulated.rgb = kPalette[0];
+  for (const StudyRow& r : rows) {
+    if (!r.ok() || !std::isfinite(r.finalTipPressurePa)) continue;
+    simulated.x.push_back(r.spec.viscosityPaS);
+    simulated.y.push_back(r.finalTipPressurePa / largest);
+    maxViscosity = std::max(maxViscosity, r.spec.viscosityPaS);
+  }
+  simulated.style = simulated.x.size() > 1 ? PlotSeries::Style::LineAndPoints : PlotSeries::Style::Points;
+  simulated.width = 2.5;
+  spec.series.push_back(simulated);
+  // Both axes from 0, as Fig. 8 and 9; room above 1 for the legend.
+  spec.xMin = 0.0;
+  spec.xMax = 1.05 * maxViscosity;
+  spec.yMin = 0.0;
+  spec.yMax = 1.3;
+  return spec;
+}
+
+std::string endPressureCaption() {
+  return "the outlet (tip) pressure at the end of injection of each run of the viscosity sweep, divided by the "
+         "largest of them, against the cement's viscosity: the simulated half of the paper's Fig. 9 "
+         "(\"Normalized outlet cement pressure compared between experiments and simulations\"; Basafa et al. 2013). "
+         "No experimental pressures are read, so there is no experimental series.";
+}
+
+void writeEndPressureVsViscosityPlot(const std::vector<StudyRow>& rows, const std::filesystem::path& png) {
+  rendering::writePlotPng(endPressureVsViscositySpec(rows), png);
+}
+
 void writeErrorVsWallTimePlot(const std::vector<StudyRow>& rows, const std::filesystem::path& png) {
   rendering::writePlotPng(errorVsWallTimeSpec(rows), png);
 }

@@ -1,5 +1,7 @@
 #include "cementsph/study/StudyReport.h"
 
+#include "cementsph/study/StudyPlots.h"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -100,7 +102,8 @@ std::string viscosityCsv(const std::vector<StudyRow>& rows) {
   std::ostringstream csv;
   csv << "viscosity_pa_s,particle_radius_mm,integrator,status,particle_spreading_distance_mm,"
          "cement_spreading_distance_mm,cement_volume_ml,max_tip_pressure_pa,steps,wall_time_s,real_time_factor,"
-         "fluid_particles,fixed_particles,escaped_particles,fluid_in_solid_fraction,failure,rank\n";
+         "fluid_particles,fixed_particles,escaped_particles,fluid_in_solid_fraction,failure,rank,"
+         "final_tip_pressure_pa\n";
   for (const StudyRow& r : rows) {
     csv << num(r.spec.viscosityPaS) << ',' << num(r.spec.particleRadiusMm) << ',' << r.spec.integrator << ','
         << (r.ok() ? "ok" : "failed") << ',' << num(okValue(r, r.particleSpreadingMm)) << ','
@@ -109,7 +112,7 @@ std::string viscosityCsv(const std::vector<StudyRow>& rows) {
         << num(okValue(r, r.wallTimeS)) << ',' << num(okValue(r, r.realTimeFactor)) << ','
         << num(okValue(r, r.fluidParticles)) << ',' << num(okValue(r, r.fixedParticles)) << ','
         << num(okValue(r, r.escapedParticles)) << ',' << num(okValue(r, r.fluidInSolidFraction)) << ','
-        << text(r.failure) << ',' << r.rank << '\n';
+        << text(r.failure) << ',' << r.rank << ',' << num(okValue(r, r.finalTipPressurePa)) << '\n';
   }
   return csv.str();
 }
@@ -161,6 +164,8 @@ std::string studyMarkdown(const std::vector<StudyRow>& sizeRows, const std::vect
          << " | " << sig(r.wallTimeS) << " |\n";
     }
     md << "\n";
+    md << "## Outlet pressure at the end of injection against viscosity (paper Fig. 9)\n\n"
+          "end_pressure_vs_viscosity.png: " << endPressureCaption() << "\n\n";
   }
   for (std::size_t i = 0; i < failures.size(); ++i) md << "(" << i + 1 << ") " << failures[i] << "\n";
   return md.str();

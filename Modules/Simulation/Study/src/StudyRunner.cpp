@@ -98,6 +98,7 @@ StudyRow StudyRunner::score(const StudyRunSpec& spec, const SimulatedRun& simula
   row.volumeInjectedMl = m.volumeInjectedMl;
   row.particleSpreadingMm = m.meanSpreadingDistanceMm;
   row.maxTipPressurePa = m.maxTipPressurePa;
+  row.finalTipPressurePa = m.finalTipPressurePa;
   row.fluidInSolidFraction = m.fluidInSolidFraction;
 
   const auto start = std::chrono::steady_clock::now();

@@ -33,6 +33,8 @@ struct SliceComparisonOptions {
   bool annotate = true;
   double scaleBarMm = 10.0; // 0: no bar
   int fontPx = 12;
+  // The first row's name in its titles: what the post-injection scan is (study::postScanLabel).
+  std::string postRowName = "post-op CT";
 };
 
 // The z positions (mm) of the slices renderSliceComparison() draws: spacingMm apart, centred on the

@@ -25,6 +25,9 @@ struct SurfaceComparisonOptions {
   // given, the middle panel draws each vertex of the simulated surface in the colour of the nearest cement
   // voxel within one voxel (blue in bone, red leaked; blue where none is that near) and its title says so.
   vtkImageData* simulationLabels = nullptr;
+  // The left panel's title: what the post-injection scan is (study::postScanLabel: "post (CT)", or
+  // "post (phantom, simulated)" for a scan the phantom made).
+  std::string postTitle = "post (CT)";
   // Camera direction (from the focal point towards the camera) and view-up, patient axes.
   double viewDirection[3] = {0.55, -1.0, 0.45};
   double viewUp[3] = {0.0, 0.0, 1.0};

@@ -30,6 +30,7 @@ struct StudyRow {
   double expectedParticles = 0;     // requested volume / (2r)^3: the volume-exact emitter's count
   double particleSpreadingMm = 0;   // [mean_spreading_distance_mm]: mean particle distance from the tip
   double maxTipPressurePa = 0;      // [max_tip_pressure_pa]
+  double finalTipPressurePa = 0;    // [final_tip_pressure_pa]: the outlet pressure at the end of injection
   double fluidInSolidFraction = 0;  // [fluid_in_solid_fraction]
 
   // The simulated CT's cement, segmented as `compare` does (AnalysedCement), and its errors.
