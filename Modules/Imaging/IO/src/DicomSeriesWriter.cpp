@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <optional>
 #include <random>
@@ -43,7 +44,24 @@ public:
 private:
   std::mt19937_64 rng_{std::random_device{}()};
 };
+
+std::optional<std::uintmax_t> statvfsFreeBytes(const std::string& folder) {
+  struct statvfs fsInfo {};
+  if (statvfs(folder.c_str(), &fsInfo) != 0) return std::nullopt;
+  return std::uintmax_t(fsInfo.f_bavail) * fsInfo.f_frsize;
+}
+
+FreeSpaceQuery& freeSpaceQuery() {
+  static FreeSpaceQuery query = statvfsFreeBytes;
+  return query;
+}
 } // namespace
+
+FreeSpaceQuery setFreeSpaceQuery(FreeSpaceQuery query) {
+  FreeSpaceQuery previous = freeSpaceQuery();
+  freeSpaceQuery() = query ? std::move(query) : FreeSpaceQuery(statvfsFreeBytes);
+  return previous;
+}
 
 void writeDicomSeries(const ImageType* image, const std::string& directory, double rescaleInterceptHU) {
   namespace fs = std::filesystem;
@@ -118,13 +136,16 @@ void writeDicomSeries(const ImageType* image, const std::string& directory, doub
   {
     const std::uintmax_t sliceBytes = std::uintmax_t(size[0]) * size[1] * 2 + 4096;
     const std::uintmax_t needed = sliceBytes * size[2] + sliceBytes * size[2] / 10;
-    struct statvfs fsInfo {};
-    if (statvfs(staged.path().c_str(), &fsInfo) == 0) {
-      const std::uintmax_t available = std::uintmax_t(fsInfo.f_bavail) * fsInfo.f_frsize;
-      if (available < needed)
-        throw OutputError(directory + ": not enough room for the DICOM series (" + std::to_string(needed >> 20) +
-                          " MB needed, " + std::to_string(available >> 20) + " MB free); free some space or write "
-                          "elsewhere");
+    if (const std::optional<std::uintmax_t> available = freeSpaceQuery()(staged.path().string())) {
+      // Three significant digits: a small series needs well under 1 MB, which whole MB would call 0.
+      auto megabytes = [](std::uintmax_t bytes) {
+        std::ostringstream s;
+        s << std::setprecision(3) << double(bytes) / 1048576.0;
+        return s.str();
+      };
+      if (*available < needed)
+        throw OutputError(directory + ": not enough room for the DICOM series (" + megabytes(needed) +
+                          " MB needed, " + megabytes(*available) + " MB free); free some space or write elsewhere");
     }
     struct rlimit limit {};
     if (getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && limit.rlim_cur < sliceBytes)

@@ -7,6 +7,9 @@
 #include "cementsph/imaging/ImageTypes.h"
 
 #include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
 #include <string>
 
 namespace cementsph::imaging {
@@ -48,5 +51,12 @@ void writeMask(const MaskType* mask, const std::string& path);
 // one line and leaves no slice behind.
 void writeDicomSeries(const ImageType* image, const std::string& directory,
                       double rescaleInterceptHU = 0.0);
+
+// How writeDicomSeries asks for the room left where it writes: bytes free to this user on the filesystem
+// holding `folder` (statvfs: f_bavail x f_frsize), or std::nullopt when that cannot be told (then the check
+// is skipped and a failed write is still caught after). Replaceable, so that a test reaches the "not enough
+// room" refusal without filling a disk; an empty query restores statvfs. Returns the query it replaced.
+using FreeSpaceQuery = std::function<std::optional<std::uintmax_t>(const std::string& folder)>;
+FreeSpaceQuery setFreeSpaceQuery(FreeSpaceQuery query);
 
 } // namespace cementsph::imaging
