@@ -35,13 +35,13 @@ mkdir -p "$out/obj" "$out/bin" "$out/findings"
 sph_src=$(cd "$here" && find Modules/Core/Rheology/src Modules/Core/SPH/src Modules/Core/VoxelDarcy/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
 includes="-I$here/Modules/Core/Rheology/include -I$here/Modules/Core/SPH/include -I$here/Modules/Core/VoxelDarcy/include -I$here/Modules/Simulation/Scene/include -I$here/Modules/Imaging/IO/src \
 -I$here/Testing/Fuzz/targets -isystem /usr/include/eigen3"
-# Suites built here: those of Testing/Core and Testing/Simulation that link only the plain C++ modules
+# Suites built here: those of Modules/Core/*/test and Modules/Simulation/Scene/test that link only the plain C++ modules
 # (Rheology, SPH, VoxelDarcy, Scene): the unit ones, and the voxel filling's validation suite (name:source).
-tests="SPHKernelsTest:Testing/Core/SPH/KernelsTest.cxx SPHSimulationTest:Testing/Core/SPH/SimulationTest.cxx
-SPHFixedParticleFieldTest:Testing/Core/SPH/FixedParticleFieldTest.cxx SPHInjectionUnitTest:Testing/Core/SPH/InjectionUnitTest.cxx
-SPHRheologyTest:Testing/Core/SPH/RheologyTest.cxx SceneConfigTest:Testing/Simulation/SceneConfigTest.cxx
-RunEstimateTest:Testing/Simulation/RunEstimateTest.cxx DarcyTableTest:Testing/Core/SPH/DarcyTableTest.cxx
-VoxelDarcyFillingTest:Testing/Core/VoxelDarcy/VoxelDarcyFillingTest.cxx"
+tests="SPHKernelsTest:Modules/Core/SPH/test/KernelsTest.cxx SPHSimulationTest:Modules/Core/SPH/test/SimulationTest.cxx
+SPHFixedParticleFieldTest:Modules/Core/SPH/test/FixedParticleFieldTest.cxx SPHInjectionUnitTest:Modules/Core/SPH/test/InjectionUnitTest.cxx
+SPHRheologyTest:Modules/Core/SPH/test/RheologyTest.cxx SceneConfigTest:Modules/Simulation/Scene/test/SceneConfigTest.cxx
+RunEstimateTest:Modules/Simulation/Scene/test/RunEstimateTest.cxx DarcyTableTest:Modules/Core/SPH/test/DarcyTableTest.cxx
+VoxelDarcyFillingTest:Modules/Core/VoxelDarcy/test/VoxelDarcyFillingTest.cxx"
 fuzzers="nrrd_header metaimage_header nifti_header scene_json"
 launcher=""
 if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
@@ -79,6 +79,13 @@ if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
   echo "-include obj/*.d"
   echo ".DEFAULT_GOAL := all"
 } > "$out/Makefile"
+# A source that moved (git mv) leaves its object's dependency file naming the old path, which make cannot remake:
+# drop such objects, so they are built again from the new path.
+for d in "$out"/obj/*.d; do
+  [ -e "$d" ] || continue
+  src=$(tr -d '\\\n' < "$d" | awk '{print $2}') # the first prerequisite: the source
+  if [ -n "$src" ] && [ ! -e "$src" ]; then rm -f "$d" "${d%.d}.o"; fi
+done
 echo "ci-sanitizers.sh: building in $out (clang, -O1 -g, ASan+UBSan)"
 if ! flock "$lock" make -C "$out" -j"$jobs" -s > "$out/build.log" 2>&1; then
   tail -n 60 "$out/build.log"; echo "ci-sanitizers.sh: sanitizer build failed ($out/build.log)" >&2; exit 1

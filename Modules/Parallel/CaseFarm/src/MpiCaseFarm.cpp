@@ -172,7 +172,7 @@ private:
   }
 
   void serve(const Work& work) {
-    // A test of failing ranks (Testing/Simulation/MpiTest): every case sent to this rank fails.
+    // A test of failing ranks (Applications/cementsph/test/MpiTest): every case sent to this rank fails.
     const char* failRank = std::getenv("CEMENTSPH_FAIL_RANK");
     const bool fail = failRank && std::to_string(rank_) == failRank;
     for (;;) {

@@ -13,7 +13,7 @@
 // The grid is filled lazily in bricks of kBrick^3 cells: only where cement goes (a few % of a 40 mm
 // region) is ever summed. prepare() fills, in parallel, the bricks that contain a set of points;
 // sample() is then read-only and thread safe. The accuracy against the exact sums is a test
-// (Testing/Core/SPH) and the cost of the approximation on an injection is in VALIDATION.md.
+// (Modules/Core/SPH/test) and the cost of the approximation on an injection is in VALIDATION.md.
 #pragma once
 
 #include "cementsph/sph/Domain.h"

@@ -2,7 +2,7 @@
 // weakly compressible model, Basafa et al. 2013 Eqs. 2-9) and "incompressible" (the particles' Darcy pressure
 // solve, Pressure/IncompressibleDarcy.h).
 //
-// Assembly (as Testing/Core/SPH/InjectionScene.h, with the CT's porous solid): the porous solid of the ROI
+// Assembly (as Modules/Core/SPH/test/InjectionScene.h, with the CT's porous solid): the porous solid of the ROI
 // (PorousSolid.h) as fixed particles of mass rho0 V_voxel; the cannula emitter (volume-exact, optional wall of
 // length cannula_length_mm, clipped to the ROI); the viscosity schedule applied each step. The outlet pressure:
 // with the equation of state the paper's six-point ring (TipPressureProbe, model pressure); incompressible, the

@@ -1,6 +1,6 @@
 // Every numeric choice of the phantom's post-scan injection, pinned here, so that a change of an engine,
 // preset or scene default does not silently change what `cementsph phantom` makes (Data/foam-phantom is
-// regenerated and compared by Testing/Phantom/PhantomReproducibilityTest). The choices the scene can set are
+// regenerated and compared by Applications/cementsph/test/PhantomReproducibilityTest). The choices the scene can set are
 // set on the scene (phantomInjectionScene); the model preset's values that no scene key reaches are checked
 // against the preset before the run (checkModelPreset), and a mismatch stops the generator with one line.
 //
