@@ -35,9 +35,12 @@
 //    0.025 N/m (ModelSelection.h's kCementMarrowTensionNPerM) is an order-of-magnitude value, stated as such.
 //    theta (contact_angle_deg, through the marrow): marrow (water and fat) wets bone better than the cement
 //    dough; not measured either: 0 (cos 1) gives the largest entry pressure, an upper bound of the effect.
-//  * Off by default (capillary_tension_n_per_m 0), and the `paper` preset unchanged: the mechanism is an
-//    assumption with unmeasured parameters, its effect at them is small (metrics.json says how small: the
-//    capillary number at the front), and the default's single-phase oracles and figures stay exact. metrics.json
+//  * Off by default (capillary_tension_n_per_m 0), and the `paper` preset unchanged: the mechanism rests on two
+//    unmeasured parameters, and the default's single-phase oracles and figures stay exact. Its size at 0.025 N/m:
+//    Ca 70-600 at 50-400 Pa.s on the vertebra phantom (entry pressures 25-100 Pa against kPa at the tip), which
+//    moves the spreading by under 1 % but a small leak at the front's fringe by tens of percent (+37 % at 50 Pa.s,
+//    +4 % at 400 Pa.s on the phantom with a vein, VALIDATION.md); leak figures are therefore given both ways in
+//    the validation, and a planning user can switch it on per scene. metrics.json
 //    says whether it ran, its capillary number Ca = (tip pressure - front entry pressure) / front entry pressure
 //    (the viscous pressure across the cement over the capillary pressure: >> 1, viscosity dominates and the
 //    front follows the mobility alone; ~ 1, the front prefers low-entry paths) and, off, the Ca it would have
@@ -133,6 +136,11 @@ std::vector<float> capillaryEntryPressure(const PorousSolid& solid, double tensi
     entry[c] = float(2.0 * tensionNPerM / (rMm * 1e-3));
   }
   return entry;
+}
+
+// sigma cos(theta) of the scene's capillary entry [N/m].
+double tensionTimesCosine(const SceneConfig& scene) {
+  return scene.capillaryTensionNPerM * std::cos(scene.contactAngleDeg * 3.14159265358979323846 / 180.0);
 }
 
 // Capillary entry pressure of each open voxel of a continuum medium [Pa]: the capillary-bundle throat
@@ -300,8 +308,7 @@ public:
 
     // Capillary entry (the header): sigma cos(theta). On continuum bone the entry pressures at unit tension are
     // kept whether or not it is on, for the capillary number it would have (metrics.json).
-    const double cosTheta = std::cos(scene.contactAngleDeg * 3.14159265358979323846 / 180.0);
-    const double tension = scene.capillaryTensionNPerM * cosTheta;
+    const double tension = tensionTimesCosine(scene);
     if (continuum_) unitEntry_ = continuumEntryPressure(medium, 1.0);
     filling_ = std::make_unique<VoxelDarcyFilling>(std::move(medium));
     filling_->setSource(tip_, sourceRadius_);
@@ -505,8 +512,7 @@ private:
     const SceneConfig& scene = *scene_;
     const VoxelDarcyFilling& filling = *filling_;
     const bool on = !filling.entryPressure().empty();
-    const double assumedTension = on ? scene.capillaryTensionNPerM * std::cos(scene.contactAngleDeg * 3.14159265358979323846 / 180.0)
-                                     : kCementMarrowTensionNPerM;
+    const double assumedTension = on ? tensionTimesCosine(scene) : kCementMarrowTensionNPerM;
     double total = 0, out = 0, boneFlow = 0, boneEntry = 0;
     for (const auto& [c, q] : filling.frontInflow()) {
       total += q;
@@ -536,15 +542,19 @@ private:
     }
     std::ostringstream why;
     why.precision(3);
+    // No verdict from Ca alone: the front's shift toward low-entry paths is small (1 / Ca of the viscous pressure),
+    // but a leak at the front's fringe is small too (on the vertebra phantom with a vein, Ca 79 raised a 0.038 ml
+    // leak by 37 %, Ca 620 by 4 %).
     if (on) {
-      why << "on: the scene sets capillary_tension_n_per_m " << scene.capillaryTensionNPerM << " N/m, contact_angle_deg "
-          << scene.contactAngleDeg;
-      if (ca) why << "; Ca " << *ca << (*ca > 30 ? ": viscosity dominates, the entry pressure barely steers the front"
-                                                 : ": the entry pressure steers the front toward low-entry paths");
+      why << "on: the scene sets capillary_tension_n_per_m " << scene.capillaryTensionNPerM
+          << " N/m, contact_angle_deg " << scene.contactAngleDeg;
+      if (ca) why << "; Ca " << *ca << ": the entry pressure steers the front toward low-entry paths as 1 / Ca";
     } else {
-      why << "off (capillary_tension_n_per_m 0, the default: an assumption with unmeasured parameters, VoxelDarcyInjectionModel.cpp)";
-      if (ca) why << "; at sigma " << kCementMarrowTensionNPerM << " N/m it would have Ca " << *ca
-                  << (*ca > 30 ? ": negligible here" : ": it could steer this front, set capillary_tension_n_per_m to model it");
+      why << "off (capillary_tension_n_per_m 0, the default: its parameters are not measured, "
+             "VoxelDarcyInjectionModel.cpp)";
+      if (ca)
+        why << "; at sigma " << kCementMarrowTensionNPerM << " N/m it would have Ca " << *ca
+            << " (the steering falls as 1 / Ca; set capillary_tension_n_per_m to see what it does to the leak)";
     }
     cap["reason"] = why.str();
     e["capillary"] = cap;
@@ -555,10 +565,16 @@ private:
     risk["leaked_volume_fraction"] =
         filling.injectedVolume() > 0 ? s.leakageVolumeMl * 1e-6 / filling.injectedVolume() : 0.0;
     if (ca) risk["capillary_number"] = *ca;
-    risk["drivers"] = on ? "capillary entry on: leakage falls as Ca rises (viscosity, curing, and also flow rate: the "
-                           "last against the clinical finding) and grows with volume (the front reaches a leak path)"
-                         : "single-phase Darcy: the flow split does not depend on viscosity, curing or flow rate; "
-                           "leakage grows with volume only (the front reaches a leak path)";
+    // Which way each clinical driver moves the leak in this model (measured on the vertebra phantom with a vein,
+    // VALIDATION.md); Ca is proportional to viscosity x flow rate / tension.
+    const char* none = "none: single-phase Darcy, the flow split does not depend on it";
+    risk["drivers"] = {
+        {"viscosity", on ? "higher cuts leakage (raises Ca), as clinically" : none},
+        {"curing", on ? "later or faster curing cuts leakage (raises the viscosity, so Ca), as clinically" : none},
+        {"flow_rate", on ? "higher cuts leakage here (raises Ca): opposite to the clinical finding, which needs a "
+                           "mechanism this model lacks (cortex fracture, pressure-opened veins)"
+                         : none},
+        {"volume", "larger raises leakage (the front reaches the leak paths), as clinically"}};
     e["leak_risk"] = risk;
   }
 
@@ -770,7 +786,8 @@ std::unique_ptr<InjectionModel> makeVoxelDarcyInjectionModel() { return std::mak
 // drag through the default pore permeability k0 = h^5 / (Cf d^3), the capillary entry, the cement's law and
 // curing, the continuum's calibration and anatomy (labels, leaks, a tip outside bone), the second tip.
 InjectionModelRegistry::SceneKeys voxelDarcySceneKeys() {
-  return {"particle_radius_mm", "drag_coefficient", "pore_permeability_m2", "capillary_tension_n_per_m", "contact_angle_deg",
+  return {"particle_radius_mm", "drag_coefficient", "pore_permeability_m2", "capillary_tension_n_per_m",
+          "contact_angle_deg",
           "viscosity_law", "consistency_pa_s_n", "flow_index", "zero_shear_viscosity_pa_s",
           "infinite_shear_viscosity_pa_s", "carreau_time_constant_s", "viscosity_min_pa_s", "viscosity_max_pa_s",
           "mixing_to_injection_s", "curing_table", "cement", "curing_model", "curing_time_s", "cured_viscosity_pa_s",
