@@ -182,6 +182,8 @@ TEST(SceneConfig, TheModelAndRheologyKeysAreReadAndCheckedNamingTheKey) {
            {"viscosity_law", "bingham"},
            {"pore_permeability_m2", 1e300},
            {"capillary_tension_n_per_m", -1.0},
+           {"contact_angle_deg", 90.0}, // the cement would wet the bone: imbibition, not an entry pressure
+           {"contact_angle_deg", -1.0},
            {"curing_table", json{{0.0, 1.0}, {0.0, 2.0}}},
            {"curing_table", json{{0.0, -1.0}}},
            {"mixing_to_injection_s", -5.0},
@@ -346,7 +348,7 @@ TEST(SceneConfig, RecordsTheKeysTheUserSet) {
 // sceneKeyNames() is the parser's list: each name is taken as a key (a value of the wrong type is refused naming
 // the key, never as an unknown key), and a name outside it is an unknown key.
 TEST(SceneConfig, TheListOfKeyNamesIsTheParsers) {
-  EXPECT_EQ(sceneKeyNames().size(), 57u); // the parser's branches, counted apart (the key == "..." tests)
+  EXPECT_EQ(sceneKeyNames().size(), 58u); // the parser's branches, counted apart (the key == "..." tests)
   for (const std::string& key : sceneKeyNames()) {
     SceneConfig s;
     try {
