@@ -1,6 +1,6 @@
 // The `cementsph drr` command, run as a user would: drr.nrrd holds the filter's numbers with the
-// detector's geometry, drr.png is an 8-bit picture of the same size; bad input gives one clear line
-// on stderr, a non-zero exit and no output at all.
+// detector's geometry, drr.png is an 8-bit picture of the same size drawn dense-dark; bad input gives one
+// clear line on stderr, a non-zero exit and no output at all.
 #include "DRRTestSupport.h"
 #include "ProgramRun.h"
 #include "cementsph/drr/vtkDRRFilter.h"
@@ -112,6 +112,12 @@ TEST_F(DrrCommand, WritesTheFilterNumbersAndAPicture) {
   EXPECT_EQ(dims[1], 48);
   EXPECT_EQ(png->GetOutput()->GetScalarType(), VTK_UNSIGNED_CHAR);
   EXPECT_EQ(png->GetOutput()->GetScalarRange()[1], 255.0);
+  // Dense matter dark, the convention of every X-ray picture the program writes (xray_frames.png too): grey =
+  // 255 (1 - value / largest value), from the filter's numbers; 1 grey level for the rounding to 8 bits.
+  const auto* grey = static_cast<const unsigned char*>(png->GetOutput()->GetScalarPointer());
+  const int components = png->GetOutput()->GetNumberOfScalarComponents();
+  for (std::size_t k = 0; k < 64 * 48; ++k)
+    ASSERT_NEAR(double(grey[k * std::size_t(components)]), 255.0 * (1.0 - double(expected[k]) / maxValue), 1.0) << k;
 }
 
 TEST_F(DrrCommand, ParallelBeamRuns) {

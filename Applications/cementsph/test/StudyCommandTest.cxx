@@ -174,3 +174,30 @@ TEST(StudyCommand, BadOptionsAreOneLineAndNoOutput) {
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("exists and is not a folder"), std::string::npos) << r.err;
 }
+
+// Issue 22 item 2: a study shows it is working before its first run is done (an MPI study printed nothing for
+// 7 minutes): a line as each run starts, before that run's result line, and nothing with --quiet.
+TEST(StudyCommand, EachRunIsAnnouncedBeforeItsResult) {
+  const fs::path out = scratch("study-progress") / "out";
+  const Result r = run(studyArgs(out, {"--radii-mm", "1.0,0.75", "--integrators", "overdamped",
+                                       "--viscosities-pa-s", "100", "--no-pictures"}));
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  const auto progress = lines(r.err);
+  const std::vector<std::string> runs{"size 1/2: overdamped r 0.75 mm (reference)", "size 2/2: overdamped r 1.00 mm",
+                                      "viscosity 1/1: overdamped r 0.57 mm, 100 Pa.s"};
+  std::size_t at = 0; // the lines in this order: start of run k, its result, start of run k + 1, ...
+  for (const std::string& run : runs) {
+    const auto start = std::find(progress.begin() + long(at), progress.end(), "study starting " + run);
+    ASSERT_NE(start, progress.end()) << "no start line for " << run << " after line " << at << ":\n" << r.err;
+    const auto result = std::find_if(start, progress.end(),
+                                     [&](const std::string& l) { return l.rfind("study " + run + ": ", 0) == 0; });
+    ASSERT_NE(result, progress.end()) << "no result line for " << run << " after its start:\n" << r.err;
+    at = std::size_t(result - progress.begin()) + 1;
+  }
+  EXPECT_EQ(count(progress, "study starting "), 3u) << r.err;
+
+  const Result quiet = run(studyArgs(scratch("study-progress-quiet") / "out",
+                                     {"--radii-mm", "1.0", "--integrators", "overdamped", "--no-pictures", "--quiet"}));
+  ASSERT_EQ(quiet.status, 0) << quiet.err;
+  EXPECT_EQ(quiet.out + quiet.err, "");
+}

@@ -1,6 +1,6 @@
 // The study's pictures (StudyPlots.h) and the point labels they need from XYPlot: stored baselines for the
 // error-against-wall-time plot (paper Fig. 6) and the spreading-against-viscosity plot (Fig. 8), and checks
-// that would fail if the labels, the data or the series were wrong. Rendered headless (no DISPLAY).
+// that would fail if the labels, the data or the series were wrong; the end-pressure plot's (Fig. 9) numbers. Rendered headless (no DISPLAY).
 #include "RenderingTestSupport.h"
 #include "StudyRowsForTests.h"
 
@@ -146,4 +146,32 @@ TEST(XYPlotLabels, LabelsMustBeOnePerPoint) {
         << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.png"));
+}
+
+// The paper's Fig. 9, its simulated half: each finished run's end pressure over the largest, against its
+// viscosity. Oracle: the pressures given, divided by hand.
+TEST(StudyPlots, EndPressureIsNormalisedByTheSweepsLargest) {
+  std::vector<study::StudyRow> rows(4);
+  const double viscosity[4] = {50, 100, 200, 400}, endPa[4] = {1000, 1500, 2000, 8000};
+  for (int i = 0; i < 4; ++i) {
+    rows[i].spec.sweep = study::StudyRunSpec::Sweep::Viscosity;
+    rows[i].spec.viscosityPaS = viscosity[i];
+    rows[i].finalTipPressurePa = endPa[i];
+  }
+  rows[2].failure = "unstable"; // a failed run is left out and does not set the scale
+  rows[2].finalTipPressurePa = 1e9;
+  const rendering::PlotSpec spec = study::endPressureVsViscositySpec(rows);
+  ASSERT_EQ(spec.series.size(), 1u);
+  EXPECT_EQ(spec.series[0].x, (std::vector<double>{50, 100, 400}));
+  ASSERT_EQ(spec.series[0].y.size(), 3u);
+  EXPECT_DOUBLE_EQ(spec.series[0].y[0], 1000.0 / 8000.0);
+  EXPECT_DOUBLE_EQ(spec.series[0].y[1], 1500.0 / 8000.0);
+  EXPECT_DOUBLE_EQ(spec.series[0].y[2], 1.0);
+  EXPECT_NE(spec.series[0].name.find("simulated"), std::string::npos);
+  EXPECT_NE(spec.title.find("Simulated"), std::string::npos); // one series: no legend, the title says it
+  EXPECT_NE(study::endPressureCaption().find("Fig. 9"), std::string::npos);
+
+  std::vector<study::StudyRow> noPressure(1);
+  noPressure[0].spec.sweep = study::StudyRunSpec::Sweep::Viscosity;
+  EXPECT_THROW(study::endPressureVsViscositySpec(noPressure), std::runtime_error);
 }
