@@ -142,3 +142,30 @@ TEST(CementsphCommand, NaNAndInfiniteNumbersAreRefusedOnEveryOption) {
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   }
 }
+
+// The particle snapshots are written on a second thread (InjectionOutputs.h): a snapshot the file system refuses
+// must still fail the run whole. Under a 4096-byte file size limit (prlimit; cementsph ignores SIGXFSZ, so the
+// write meets EFBIG rather than a signal) no 0.5 ml snapshot series fits: the last snapshot alone holds the float
+// x, y, z of every wet voxel, 0.5 ml / (0.5 mm)^3 = 4000 voxels x 12 bytes = 48 kB before compression, and LZ4
+// cannot pack grid coordinates 12-fold. Expected: exit 2, one line naming a particles_NNNN.vtp and the limit,
+// no signal, and none of the run's files left (no metrics.json, no snapshot).
+TEST(CementsphCommand, ASnapshotTheDiskRefusesFailsTheRunWhole) {
+  const cementsph::testing::ProgramRun probe = cementsph::testing::runProgram("prlimit", "--version");
+  if (probe.exitCode != 0) GTEST_SKIP() << "prlimit (util-linux) is not installed";
+  const fs::path out = scratch("snapshot-limit");
+  const std::string data = CEMENTSPH_TEST_DATA_DIR;
+  const cementsph::testing::ProgramRun r = cementsph::testing::runProgram(
+      "prlimit", {"--fsize=4096", CEMENTSPH_EXECUTABLE, "inject", "--ct", data + "/foam-phantom/pre.nrrd", "--scene",
+                  data + "/scenes/paper.json", "--tip-mm", "22.325,21.855,21.75", "--volume-ml", "0.5", "--no-pictures",
+                  "--quiet", "--threads", "1", "--out", out.string()});
+  EXPECT_EQ(r.exitCode, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("particles_"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("file size limit"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out / "metrics.json"));
+  bool snapshotLeft = false;
+  if (fs::exists(out))
+    for (const auto& entry : fs::directory_iterator(out))
+      snapshotLeft = snapshotLeft || entry.path().filename().string().rfind("particles_", 0) == 0;
+  EXPECT_FALSE(snapshotLeft);
+}
