@@ -303,13 +303,13 @@ public:
       for (std::size_t c = 0; c < medium.count(); ++c)
         if (solid.solid[c]) medium.porosity[c] = 0.0f;
     }
-    closeShaft(medium);
-    sourceRadius_ = std::max(0.5 * innerDiameter_, 0.5 * solid.grid.spacing.minCoeff());
-
     // Capillary entry (the header): sigma cos(theta). On continuum bone the entry pressures at unit tension are
-    // kept whether or not it is on, for the capillary number it would have (metrics.json).
+    // kept whether or not it is on, for the capillary number it would have (metrics.json); taken before the
+    // shaft closes its voxels, so that the tract a withdrawn cannula opens has its own bone's entry pressure.
     const double tension = tensionTimesCosine(scene);
     if (continuum_) unitEntry_ = continuumEntryPressure(medium, 1.0);
+    closeShaft(medium);
+    sourceRadius_ = std::max(0.5 * innerDiameter_, 0.5 * solid.grid.spacing.minCoeff());
     filling_ = std::make_unique<VoxelDarcyFilling>(std::move(medium));
     filling_->setSource(tip_, sourceRadius_);
     if (tension > 0) {
