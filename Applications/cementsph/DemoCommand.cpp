@@ -1,6 +1,7 @@
 // cementsph demo: the whole product on bundled data, in seconds. The foam phantom pair of
 // Data/foam-phantom (made by `cementsph phantom`), an injection with the paper's plan (its scene preset,
-// with the volume, rate, viscosity and tip the phantom's post scan was made with, read from truth.json),
+// with the volume, rate, viscosity and tip the phantom's post scan was made with: its truth.json's plan, read by
+// the Phantom module),
 // then the comparison against the phantom's post-injection CT (registration, segmentation, surfaces,
 // metrics, pictures), the X-ray sequences of the simulation and of the experiment (its pre- and registered
 // post-injection CTs as the first and last frames; paper Fig. 12) and the tip-pressure plot (Fig. 10).
@@ -13,6 +14,7 @@
 #include "CommandRequests.h"
 
 #include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/phantom/PhantomFiles.h"
 #include "cementsph/scene/SceneSettings.h"
 
 #include <nlohmann/json.hpp>
@@ -21,7 +23,6 @@
 #include <array>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -37,13 +38,6 @@ struct DemoOptions {
   bool vertebra = false;
 };
 
-nlohmann::json readJson(const fs::path& path) {
-  std::ifstream in(path);
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded()) throw std::runtime_error(path.string() + ": missing or not JSON");
-  return j;
-}
-
 std::string vec3(const nlohmann::json& v) {
   std::ostringstream s;
   s.precision(10);
@@ -55,17 +49,13 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::array<double, 3> vector3(const nlohmann::json& v) {
-  return {v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()};
-}
-
-// The plan's tip, volume, rate and viscosity as scene settings (the keys of truth.json's "injection").
-cementsph::scene::SceneSettings planSettings(const nlohmann::json& plan) {
+// The plan's tip, volume, rate and viscosity as scene settings.
+cementsph::scene::SceneSettings planSettings(const cementsph::phantom::PhantomInjectionPlan& plan) {
   cementsph::scene::SceneSettings settings;
-  settings.tipMm = vector3(plan.at("tip_mm"));
-  settings.volumeMl = plan.at("volume_ml").get<double>();
-  settings.flowRateMlPerS = plan.at("flow_rate_ml_per_s").get<double>();
-  settings.viscosityPaS = plan.at("viscosity_pa_s").get<double>();
+  settings.tipMm = plan.tipMm;
+  settings.volumeMl = plan.volumeMl;
+  settings.flowRateMlPerS = plan.flowRateMlPerS;
+  settings.viscosityPaS = plan.viscosityPaS;
   return settings;
 }
 
@@ -85,16 +75,16 @@ void printVertebraSummary(const nlohmann::json& m, const fs::path& out) {
 int runVertebraDemo(const DemoOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path phantom = fs::path(o.dataDir) / "vertebra-phantom";
-  const nlohmann::json truth = readJson(phantom / "truth.json");
-  const nlohmann::json& plan = truth.at("injection");
+  const cementsph::phantom::PhantomInjectionPlan plan = cementsph::phantom::readInjectionPlan(phantom);
+  if (!plan.direction) throw std::runtime_error((phantom / "truth.json").string() + ": injection.direction is missing");
   const fs::path out(o.out);
-  std::cerr << "demo --vertebra: injecting " << plan.at("volume_ml").get<double>()
+  std::cerr << "demo --vertebra: injecting " << plan.volumeMl
             << " ml into the clinical vertebra phantom (DICOM series, 1 x 1 x 1.5 mm voxels) by a transpedicular plan\n";
   cementsph::app::InjectRequest inject;
   inject.ct = (phantom / "pre_dicom").string();
   inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
   inject.settings = planSettings(plan);
-  inject.settings.direction = vector3(plan.at("direction"));
+  inject.settings.direction = plan.direction;
   inject.threads = o.threads;
   inject.out = (out / "inject").string();
   nlohmann::json m;
@@ -141,17 +131,16 @@ nlohmann::json demoSummary(const DemoMetrics& m, double wallS) {
 
 // The three subcommands in turn; false (with *rc their status) when one failed outright. A status 3 (a picture
 // failed, its numbers are written) goes on and is reported at the end in *status.
-bool runFoamSteps(const DemoOptions& o, const fs::path& phantom, const nlohmann::json& plan, DemoMetrics& m,
-                  int* rc, int* status) {
+bool runFoamSteps(const DemoOptions& o, const fs::path& phantom, const cementsph::phantom::PhantomInjectionPlan& plan,
+                  DemoMetrics& m, int* rc, int* status) {
   auto step = [&](int code) {
     *rc = code;
     if (code == 3) *status = 3;
     return code == 0 || code == 3;
   };
   const fs::path out(o.out);
-  std::cerr << "demo 1/4: injecting " << plan.at("volume_ml").get<double>() << " ml at "
-            << plan.at("flow_rate_ml_per_s").get<double>() << " ml/s, " << plan.at("viscosity_pa_s").get<double>()
-            << " Pa.s into the foam phantom (paper's plan), with a simulated CT every second\n";
+  std::cerr << "demo 1/4: injecting " << plan.volumeMl << " ml at " << plan.flowRateMlPerS << " ml/s, "
+            << plan.viscosityPaS << " Pa.s into the foam phantom (paper's plan), with a simulated CT every second\n";
   cementsph::app::InjectRequest inject;
   inject.ct = (phantom / "pre.nrrd").string();
   inject.scene = (fs::path(o.dataDir) / "scenes" / "paper.json").string();
@@ -166,7 +155,7 @@ bool runFoamSteps(const DemoOptions& o, const fs::path& phantom, const nlohmann:
   compare.pre = (phantom / "pre.nrrd").string();
   compare.post = (phantom / "post.nrrd").string();
   compare.simulated = (out / "inject" / "simulated_ct.nrrd").string();
-  compare.injection = plan.at("tip_mm").get<std::vector<double>>();
+  compare.injection = {plan.tipMm[0], plan.tipMm[1], plan.tipMm[2]};
   compare.out = (out / "compare").string();
   if (!step(cementsph::app::runCompare(compare, &m.compare))) return false;
 
@@ -186,14 +175,11 @@ int runDemo(const DemoOptions& o) {
   if (o.vertebra) return runVertebraDemo(o);
   const auto start = std::chrono::steady_clock::now();
   const fs::path phantom = fs::path(o.dataDir) / "foam-phantom";
-  const fs::path truthPath = phantom / "truth.json";
-  std::ifstream truthFile(truthPath);
-  if (!truthFile) throw std::runtime_error(truthPath.string() + ": cannot read the bundled phantom (use --data-dir)");
-  const nlohmann::json truth = nlohmann::json::parse(truthFile);
+  const cementsph::phantom::PhantomInjectionPlan plan = cementsph::phantom::readInjectionPlan(phantom);
   const fs::path out(o.out);
   DemoMetrics m;
   int rc = 0, status = 0;
-  if (!runFoamSteps(o, phantom, truth.at("injection"), m, &rc, &status)) return rc;
+  if (!runFoamSteps(o, phantom, plan, m, &rc, &status)) return rc;
 
   std::cerr << "demo 4/4: summary\n";
   for (const char* picture : {"tip_pressure.png", "injection_pressure.png"}) {

@@ -47,6 +47,13 @@ scene::SceneSettings sceneSettings(const CLI::App& sub, const SceneOverrideArgs&
   if (sub.count("--viscosity-pa-s")) settings.viscosityPaS = a.viscosityPaS;
   if (sub.count("--snapshot-interval-s")) settings.snapshotIntervalS = a.snapshotIntervalS;
   if (!a.preset.empty()) settings.modelPreset = a.preset;
+  // A value the scene refuses (say a rate too slow for the volume) is then blamed on the option as typed.
+  settings.optionOfKey = {{"tip_mm", "--tip-mm"},
+                          {"volume_ml", "--volume-ml"},
+                          {"flow_rate_ml_per_s", "--flow-rate-ml-per-s"},
+                          {"viscosity_pa_s", "--viscosity-pa-s"},
+                          {"snapshot_interval_s", "--snapshot-interval-s"},
+                          {"preset", "--preset"}};
   return settings;
 }
 

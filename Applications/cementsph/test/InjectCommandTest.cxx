@@ -73,6 +73,31 @@ TEST(InjectCommand, BadSceneIsOneLineAndNoOutput) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
+// A value the scene refuses names what the user typed: the option (--flow-rate-ml-per-s, with the number as
+// typed), or, through --set, the scene key; never the other one. 1e-9 ml/s takes 1e8 s for 0.1 ml, over the
+// scene's one-day limit, yet is positive and finite, so it passes the option's own checks and reaches the scene's.
+TEST(InjectCommand, ASceneLimitNamesTheOptionOrTheSetKeyTheUserTyped) {
+  const fs::path dir = writeCase(scratch("inject-option-blame"), R"({"tip_mm": [13, 13, 13], "volume_ml": 0.1})");
+  const std::string common = "inject --ct " + (dir / "ct.nrrd").string() + " --scene " + (dir / "scene.json").string() +
+                             " --out " + (dir / "out").string();
+  const Result option = run(common + " --flow-rate-ml-per-s 1e-9");
+  EXPECT_EQ(option.status, 1);
+  EXPECT_NE(option.output.find("--flow-rate-ml-per-s 1.0000000000000001e-09 (command line): scene: key "
+                               "'flow_rate_ml_per_s' is too small"),
+            std::string::npos)
+      << option.output;
+  EXPECT_EQ(option.output.find("override"), std::string::npos) << option.output;
+  EXPECT_EQ(std::count(option.output.begin(), option.output.end(), '\n'), 1) << option.output;
+
+  const Result set = run(common + " --set flow_rate_ml_per_s=1e-9");
+  EXPECT_EQ(set.status, 1);
+  EXPECT_NE(set.output.find("override flow_rate_ml_per_s=1e-9 (command line): scene: key 'flow_rate_ml_per_s' is too small"),
+            std::string::npos)
+      << set.output;
+  EXPECT_EQ(set.output.find("--flow-rate-ml-per-s"), std::string::npos) << set.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(InjectCommand, TipInSolidIsOneLineAndNoOutput) {
   const fs::path dir = writeCase(scratch("inject-solid"), R"({"tip_mm": [0.5, 0.5, 13], "volume_ml": 0.1})");
   const Result r = run("inject --ct " + (dir / "ct.nrrd").string() + " --scene " + (dir / "scene.json").string() +

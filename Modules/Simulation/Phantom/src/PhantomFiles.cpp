@@ -4,6 +4,7 @@
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/phantom/PhantomNumerics.h"
 
+#include <fstream>
 #include <stdexcept>
 
 namespace cementsph::phantom {
@@ -83,6 +84,37 @@ json vertebraTruthJson(const VertebraOptions& vo, const VertebraResult& v, doubl
                         {"volume_ml", 4.0},               {"flow_rate_ml_per_s", 0.05},
                         {"viscosity_pa_s", 100.0},        {"note", "a transpedicular plan for the demo"}};
   return truth;
+}
+
+PhantomInjectionPlan readInjectionPlan(const fs::path& phantomFolder) {
+  const fs::path path = phantomFolder / "truth.json";
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot read the phantom's truth.json (is --data-dir right?)");
+  const json truth = json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (truth.is_discarded())
+    throw std::runtime_error(path.string() + ": not JSON; make the phantom again (cementsph phantom)");
+  if (!truth.contains("injection") || !truth["injection"].is_object())
+    throw std::runtime_error(path.string() + ": no \"injection\" object (a phantom with no planned injection)");
+  const json& j = truth["injection"];
+  auto number = [&](const char* key) {
+    if (!j.contains(key) || !j[key].is_number())
+      throw std::runtime_error(path.string() + ": injection." + key + " is missing or not a number");
+    return j[key].get<double>();
+  };
+  auto vector3 = [&](const char* key) {
+    const json& v = j[key];
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+      throw std::runtime_error(path.string() + ": injection." + key + " must be [x, y, z]");
+    return std::array<double, 3>{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+  };
+  PhantomInjectionPlan plan;
+  if (!j.contains("tip_mm")) throw std::runtime_error(path.string() + ": injection.tip_mm is missing");
+  plan.tipMm = vector3("tip_mm");
+  if (j.contains("direction")) plan.direction = vector3("direction");
+  plan.volumeMl = number("volume_ml");
+  plan.flowRateMlPerS = number("flow_rate_ml_per_s");
+  plan.viscosityPaS = number("viscosity_pa_s");
+  return plan;
 }
 
 void writePhantomFiles(const fs::path& out, const PhantomFiles& files) {

@@ -1,11 +1,16 @@
 // The synthetic foam phantom (Modules/Simulation/Phantom): porosity, determinism, partial volume, the
 // misalignment, the tip in a pore, bad input.
 #include "cementsph/phantom/FoamPhantom.h"
+#include "cementsph/phantom/PhantomFiles.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
 #include <stdexcept>
+#include <string>
 
 using namespace cementsph::phantom;
 
@@ -241,4 +246,43 @@ TEST(PhantomNumerics, APresetThatNoLongerMatchesIsOneClearError) {
   n = PhantomNumerics{};
   n.viscosityModel = "morris";
   EXPECT_THROW(checkModelPreset(n), std::runtime_error);
+}
+
+// truth.json's plan as the demo gets it (readInjectionPlan): a hand-written file read back exactly, a missing key
+// named, and the bundled foam phantom's plan equal to the options of the command its truth.json records
+// (--volume-ml 1 --viscosity-pa-s 100; the rate, 0.05 ml/s, is the command's default, as FoamPhantom.h's).
+TEST(PhantomFiles, TheInjectionPlanIsReadFromTruthJsonAndAMissingKeyIsNamed) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-phantom-plan-test";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "truth.json") << R"({"injection": {"tip_mm": [1.5, -2, 30.25], "direction": [0, -1, 0],
+    "volume_ml": 4, "flow_rate_ml_per_s": 0.125, "viscosity_pa_s": 250}})";
+  const PhantomInjectionPlan plan = readInjectionPlan(dir);
+  EXPECT_EQ(plan.tipMm, (std::array<double, 3>{1.5, -2.0, 30.25}));
+  ASSERT_TRUE(plan.direction);
+  EXPECT_EQ(*plan.direction, (std::array<double, 3>{0.0, -1.0, 0.0}));
+  EXPECT_EQ(plan.volumeMl, 4.0);
+  EXPECT_EQ(plan.flowRateMlPerS, 0.125);
+  EXPECT_EQ(plan.viscosityPaS, 250.0);
+
+  std::ofstream(dir / "truth.json") << R"({"injection": {"tip_mm": [0, 0, 0], "volume_ml": 1, "viscosity_pa_s": 100}})";
+  try {
+    (void)readInjectionPlan(dir);
+    ADD_FAILURE() << "a plan without its rate was read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("injection.flow_rate_ml_per_s is missing"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+  EXPECT_THROW((void)readInjectionPlan(dir), std::runtime_error);
+
+  const auto foam = std::filesystem::path(CEMENTSPH_TEST_DATA_DIR) / "foam-phantom";
+  std::ifstream in(foam / "truth.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::smatch command;
+  ASSERT_TRUE(std::regex_search(text, command, std::regex(R"re("command": "([^"]*)")re")));
+  const PhantomInjectionPlan bundled = readInjectionPlan(foam);
+  EXPECT_NE(command[1].str().find("--volume-ml 1 "), std::string::npos) << command[1];
+  EXPECT_EQ(bundled.volumeMl, 1.0);
+  EXPECT_NE(command[1].str().find("--viscosity-pa-s 100"), std::string::npos) << command[1];
+  EXPECT_EQ(bundled.viscosityPaS, 100.0);
+  EXPECT_EQ(bundled.flowRateMlPerS, PostOptions{}.flowRateMlPerS);
 }

@@ -85,11 +85,22 @@ Eigen::Vector3d finite(const std::array<double, 3>& v, const std::string& key) {
   return {finite(v[0], key), finite(v[1], key), finite(v[2], key)};
 }
 
-// Each setting given, as the key it sets and as "key=value" for a message, in the order applied.
+// Each setting the command gave, in the order applied, as (scene key, how the user gave it): "override key=value"
+// for --set and for a typed field without an option, "--option value" for one given by an option (optionOfKey).
 std::vector<std::pair<std::string, std::string>> givenSettings(const SceneSettings& g) {
   std::vector<std::pair<std::string, std::string>> given;
-  for (const std::string& o : g.set) given.emplace_back(o.substr(0, o.find('=')), o);
-  auto add = [&](const std::string& key, const std::string& value) { given.emplace_back(key, key + "=" + value); };
+  for (const std::string& o : g.set) given.emplace_back(o.substr(0, o.find('=')), "override " + shown(o));
+  auto add = [&](const std::string& key, const std::string& value) {
+    const auto option = g.optionOfKey.find(key);
+    if (option == g.optionOfKey.end()) {
+      given.emplace_back(key, "override " + shown(key + "=" + value));
+      return;
+    }
+    // As typed: a vector is x,y,z, a text bare.
+    std::string typed = value;
+    if (typed.size() >= 2 && (typed.front() == '[' || typed.front() == '"')) typed = typed.substr(1, typed.size() - 2);
+    given.emplace_back(key, option->second + " " + shown(typed));
+  };
   auto vector = [](const std::array<double, 3>& v) {
     return "[" + exactNumber(v[0]) + "," + exactNumber(v[1]) + "," + exactNumber(v[2]) + "]";
   };
@@ -457,9 +468,9 @@ SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings
   } catch (const std::invalid_argument& e) {
     // Blame the command line's setting when it set the key at fault, else the file.
     const std::string what = e.what();
-    for (const auto& [key, assignment] : givenSettings(settings))
+    for (const auto& [key, given] : givenSettings(settings))
       if (what.find("'" + key + "'") != std::string::npos)
-        throw std::invalid_argument("override " + shown(assignment) + " (command line): " + what);
+        throw std::invalid_argument(given + " (command line): " + what);
     throw std::invalid_argument(path + ": " + what);
   }
 }

@@ -445,3 +445,51 @@ TEST(SceneConfig, TypedSettingsLandInTheirFieldsBeforeTheCheckAndAreRecorded) {
   tipOnly.tipMm = {1.0, 2.0, 3.0};
   EXPECT_EQ(errorOfSettings(tipOnly), path + ": scene: key 'volume_ml' must be > 0 (got -2)");
 }
+
+// A typed field given by a command-line option (SceneSettings::optionOfKey) is blamed on that option, as the user
+// typed it (number, x,y,z, bare text); the same value through --set, or a typed field with no option (a plan's),
+// names the scene key as key=value.
+TEST(SceneConfig, ARefusedSettingNamesTheOptionThatGaveIt) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-scene-option-blame-test";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "scene.json").string();
+  std::ofstream(path) << R"({"tip_mm": [0, 0, 0], "volume_ml": 5})";
+  auto errorOf = [&](const SceneSettings& settings) {
+    try {
+      (void)loadSceneFile(path, settings);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  SceneSettings slow;
+  slow.flowRateMlPerS = std::ldexp(1.0, -20); // 5 ml take 61 days: over the one-day limit
+  slow.optionOfKey = {{"flow_rate_ml_per_s", "--flow-rate-ml-per-s"}};
+  EXPECT_EQ(errorOf(slow).rfind("--flow-rate-ml-per-s 9.5367431640625e-07 (command line): scene: key "
+                                "'flow_rate_ml_per_s' is too small: ",
+                                0),
+            0u)
+      << errorOf(slow);
+  slow.optionOfKey.clear();
+  EXPECT_EQ(errorOf(slow).rfind("override flow_rate_ml_per_s=9.5367431640625e-07 (command line): ", 0), 0u)
+      << errorOf(slow);
+
+  SceneSettings tip;
+  tip.tipMm = {std::nan(""), 0.0, 0.0};
+  tip.optionOfKey = {{"tip_mm", "--tip-mm"}};
+  EXPECT_EQ(errorOf(tip), "--tip-mm nan,0,0 (command line): scene: key 'tip_mm' must be finite");
+
+  SceneSettings preset;
+  preset.modelPreset = "fast";
+  preset.optionOfKey = {{"preset", "--preset"}};
+  EXPECT_EQ(errorOf(preset),
+            "--preset fast (command line): scene: key 'preset' must be \"default\" or \"paper\" (got \"fast\")");
+
+  // The option names only its own key: a --set of another key is still "override key=value".
+  SceneSettings viaSet;
+  viaSet.set = {"viscosity_pa_s=-1"};
+  viaSet.optionOfKey = {{"flow_rate_ml_per_s", "--flow-rate-ml-per-s"}};
+  EXPECT_EQ(errorOf(viaSet).rfind("override viscosity_pa_s=-1 (command line): scene: key 'viscosity_pa_s' must be > 0", 0),
+            0u)
+      << errorOf(viaSet);
+}

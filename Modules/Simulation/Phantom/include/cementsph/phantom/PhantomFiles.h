@@ -9,7 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +27,20 @@ nlohmann::json injectionTruthJson(const PostOptions& options, const PostResult& 
 // truth.json of the vertebra: its geometry (the anatomy variant's where on), the options it was made with, and
 // the transpedicular plan the demo injects.
 nlohmann::json vertebraTruthJson(const VertebraOptions& options, const VertebraResult& vertebra, double generationS);
+
+// The injection a phantom's truth.json records under "injection" (the keys named beside each field): what a
+// command needs to inject the phantom again as it was planned (the demo).
+struct PhantomInjectionPlan {
+  std::array<double, 3> tipMm{};                  // tip_mm
+  std::optional<std::array<double, 3>> direction; // direction (the cannula's axis), when recorded
+  double volumeMl = 0;                            // volume_ml
+  double flowRateMlPerS = 0;                      // flow_rate_ml_per_s
+  double viscosityPaS = 0;                        // viscosity_pa_s
+};
+
+// Reads phantomFolder/truth.json's "injection". Throws std::runtime_error with one line naming the file and the
+// missing or malformed key (e.g. a folder that holds no phantom: "use --data-dir").
+PhantomInjectionPlan readInjectionPlan(const std::filesystem::path& phantomFolder);
 
 // The files of one phantom, written into one folder.
 struct PhantomFiles {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +26,10 @@ struct SceneSettings {
   std::optional<double> snapshotIntervalS;        // snapshot_interval_s
   std::optional<bool> simulatedCtSnapshots;       // simulated_ct_snapshots
   std::optional<std::string> modelPreset;         // preset
+  // The command-line option that gave a typed field, by its scene key (e.g. "viscosity_pa_s" ->
+  // "--viscosity-pa-s"), so that a value the scene refuses is blamed on the option the user typed
+  // ("--viscosity-pa-s 1e-09 (command line): ..."); a field without one reads "override key=value".
+  std::map<std::string, std::string> optionOfKey;
 };
 
 // A double written so that it reads back exactly (17 significant digits): the form of a number in the
