@@ -3,10 +3,12 @@
 //  * a uniform open medium (every voxel a pore, no shaft: cannula_wall false): the cement's mean distance
 //    from the tip 3R/4 within 2 % (R from V = 4/3 pi R^3, phi = 1); the tip pressure
 //    mu Q / (4 pi k)(1/r0 - 1/R) within 10 %, r0 the outlet profile's effective radius computed here
-//    independently (1/r0 = 1/a + int_0^a f^2 / r^2 dr for the source weight (1 - (r/a)^2)^2, a = 1.194 mm);
+//    independently (1/r0 = 1/b + int_0^b f^2 / r^2 dr for a source uniform in the ball a = 1.194 mm, each
+//    particle's share the part of its volume, a sphere of radius rp = (3/(4 pi))^(1/3) d, inside the ball:
+//    b = a + rp; here the share is integrated over disk slices, not the engine's lens formula);
 //    the volume within 1 % at every snapshot; the step-to-step tip-pressure change (median) below 5 %;
-//    the pressure profile at 1.25-2.0 mm (outside the outlet ball, inside 0.7 R) mu Q / (4 pi k)(1/r - 1/R)
-//    within 5 % (particles' mean pressure in 0.25 mm shells);
+//    the pressure profile at 1.25-2.0 mm (outside the outlet ball, inside 0.7 R) within 5 % of the continuum
+//    mu Q / (4 pi k)(int_r^inf f / s^2 ds - 1/R) (1/r - 1/R beyond b; particles' mean pressure in 0.25 mm shells);
 //  * p(400) / p(100) = 4.00 within 1 % (creeping Darcy flow: p is proportional to mu);
 //  * a hemisphere on an impermeable plane: radius 2^(1/3) times the free sphere's within 3 %;
 //  * a scaffold CT (ScaffoldCT.h): cement in solid below 0.5 % of its volume (particles against the rods'
@@ -35,19 +37,53 @@ constexpr double kPi = 3.14159265358979323846;
 // All pore: -100 HU everywhere.
 imaging::ImageType::Pointer uniform(int n, double spacingMm) { return scene::testing::cube(n, spacingMm, -100.f); }
 
-// 1/r0 = 1/a + int_0^a f(r)^2 / r^2 dr, f the enclosed share of a source of density (1 - (r/a)^2)^2:
-// f(r) = P(r/a) / P(1) with P(x) = x^3/3 - 2 x^5/5 + x^7/7 (closed form of int_0^x (1 - s^2)^2 s^2 ds).
-double effectiveRadius(double a) {
-  auto P = [](double x) { return x * x * x / 3 - 2 * std::pow(x, 5) / 5 + std::pow(x, 7) / 7; };
-  const int n = 4000; // Simpson on [0, 1] in x = r / a; the integrand f^2 / x^2 ~ x^4 near 0
-  double s = 0;
-  for (int k = 0; k <= n; ++k) {
-    const double x = double(k) / n, f = P(x) / P(1.0), g = x > 0 ? f * f / (x * x) : 0.0;
-    s += g * (k == 0 || k == n ? 1 : (k % 2 ? 4 : 2));
+// The share of a sphere of radius rp, its centre r from the tip, inside the ball of radius a about the tip: both
+// are symmetric about the line through the two centres, so each slice across it is two concentric disks
+// (radii sqrt(rp^2 - z^2) and sqrt(a^2 - (r + z)^2)), overlapping in the smaller one. Midpoint rule in z.
+double shareInBall(double r, double a, double rp) {
+  const int n = 400;
+  double v = 0;
+  for (int k = 0; k < n; ++k) {
+    const double z = -rp + 2 * rp * (k + 0.5) / n, t = r + z;
+    const double rho2 = rp * rp - z * z, sigma2 = a * a - t * t;
+    if (sigma2 > 0) v += kPi * std::min(rho2, sigma2) * (2 * rp / n);
   }
-  s *= 1.0 / (3 * n);
-  return a / (1 + s);
+  return v / (4.0 / 3 * kPi * rp * rp * rp);
 }
+
+// The outlet's source profile: f(r) the enclosed share of a source of density shareInBall, b = a + rp its outer
+// radius. The continuum pressure of it in a uniform medium is mu Q / (4 pi k)(phi(r) - 1/R) with
+// phi(r) = int_r^inf f(s) / s^2 ds (1/r beyond b), and its source-weighted mean (the outlet pressure) is
+// mu Q / (4 pi k)(1/r0 - 1/R) with 1/r0 = 1/b + int_0^b f^2 / r^2 dr (integration by parts).
+struct SourceProfile {
+  double b;
+  int n = 2000;
+  std::vector<double> f;
+  SourceProfile(double a, double rp) : b(a + rp), f(std::size_t(n) + 1, 0.0) {
+    for (int k = 1; k <= n; ++k) { // trapezoid on the enclosed source
+      const double r0 = b * (k - 1) / n, r1 = b * k / n;
+      f[std::size_t(k)] = f[std::size_t(k) - 1] +
+                          0.5 * (shareInBall(r0, a, rp) * r0 * r0 + shareInBall(r1, a, rp) * r1 * r1) * (r1 - r0);
+    }
+    const double total = f[std::size_t(n)];
+    for (double& share : f) share /= total;
+  }
+  // int_lo^b g(f(r), r) dr by the trapezoid rule on the table (g finite at r = 0: f ~ r^3).
+  template <class G> double integral(double lo, G g) const {
+    double s = 0;
+    for (int k = 1; k <= n; ++k) {
+      const double r0 = b * (k - 1) / n, r1 = b * k / n;
+      if (r1 <= lo) continue;
+      const double g0 = r0 > 0 ? g(f[std::size_t(k) - 1], r0) : 0.0, g1 = g(f[std::size_t(k)], r1);
+      s += 0.5 * (g0 + g1) * (r1 - std::max(r0, lo));
+    }
+    return s;
+  }
+  double effectiveRadius() const { return 1.0 / (1.0 / b + integral(0.0, [](double ff, double r) { return ff * ff / (r * r); })); }
+  double phi(double r) const {
+    return r >= b ? 1.0 / r : 1.0 / b + integral(r, [](double ff, double rr) { return ff / (rr * rr); });
+  }
+};
 
 struct Outcome {
   InjectionRunResult result;
@@ -83,7 +119,9 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
   const Outcome r = run(ct, uniformScene(100.0));
   const nlohmann::json& m = r.result.metrics;
   const double V = 0.1e-6, R = std::cbrt(3 * V / (4 * kPi)), mu = 100, Q = 0.05e-6, k = 1e-9;
-  const double a = 0.5 * 2.388e-3, r0 = effectiveRadius(a);
+  const double a = 0.5 * 2.388e-3, d = 0.3e-3;
+  const SourceProfile source(a, std::cbrt(3 / (4 * kPi)) * d);
+  const double r0 = source.effectiveRadius();
   const double tip = mu * Q / (4 * kPi * k) * (1 / r0 - 1 / R);
   const double noise = medianRelativeChange(r.result.tipSeries, 0.25 * V / Q);
   std::printf("uniform: spreading %.4f mm against 3R/4 %.4f mm; tip %.1f Pa against %.1f Pa (r0 %.4f mm, engine %.4f); "
@@ -111,10 +149,10 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
     }
     for (int b = 0; b < nb; ++b) {
       const double r1 = 0.25 * b, r2 = r1 + 0.25, shell = 4.0 / 3 * kPi * (r2 * r2 * r2 - r1 * r1 * r1), rm = (r1 + r2) / 2e3;
-      const double oracle = mu * Q / (4 * kPi * k) * (1 / rm - 1 / R);
+      const double oracle = mu * Q / (4 * kPi * k) * (source.phi(rm) - 1 / R);
       std::printf("  r %.3f density %.3f p %.0f (oracle %.0f) vr %.3g (oracle %.3g)\n", rm * 1e3, cnt[b] * 0.027 / shell,
                   cnt[b] > 0 ? ps[b] / cnt[b] : 0.0, oracle, cnt[b] > 0 ? vr[b] / cnt[b] : 0.0, Q / (4 * kPi * rm * rm));
-      // The profile outside the outlet ball (a = 1.194 mm) and inside 0.7 R: the point-source oracle within 5 %.
+      // The profile outside the outlet ball (a = 1.194 mm) and inside 0.7 R: the continuum oracle within 5 %.
       if (r1 >= 1.25 && r2 <= 2.0) {
         EXPECT_NEAR(ps[b] / cnt[b] / oracle, 1.0, 0.05) << "at r = " << rm * 1e3 << " mm";
       }
@@ -227,3 +265,4 @@ TEST(ParticleDarcy, NoCementEntersTheScaffoldsSolidAndTheVolumeIsKept) {
     EXPECT_NEAR(held, injected, 0.01 * injected) << "at " << h["time_s"] << " s";
   }
 }
+
