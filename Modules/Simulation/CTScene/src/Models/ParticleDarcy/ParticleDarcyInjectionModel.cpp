@@ -3,14 +3,23 @@
 // 152:584) whose "projection" is Darcy's law itself, with the drag implicit in it.
 //
 // Model (SI inside; assumptions and regime):
-//  * Creeping flow (Re << 1, inertia dropped) of an incompressible Newtonian cement (the scene's viscosity
-//    schedule mu(t)) through a rigid pore-resolved medium: pore voxels open (porosity phi = 1, permeability k
-//    = pore_permeability_m2, or the preset's k0 = h^5 / (Cf d^3) as the voxel model), solid voxels closed.
+//  * Creeping flow (Re << 1, inertia dropped) of an incompressible cement (Newtonian: the scene's viscosity
+//    schedule mu(t); or a shear-thinning law, below) through a rigid pore-resolved medium: pore voxels open
+//    (porosity phi = 1, permeability k = pore_permeability_m2, or the preset's k0 = h^5 / (Cf d^3) as the
+//    voxel model), solid voxels closed.
 //    Darcy's law u = -(M / phi) grad p, M = k / mu; div(M grad p) = -s with s the cannula's outflow. The
 //    displaced fluid is at p = 0 (gauge) at the front (its viscosity neglected; cement/marrow ratio >> 1).
 //    Dimensionless: the Darcy number k / d^2 and Re enter nowhere (no inertia); the solution scales with
 //    mu Q / k, so the pressure is proportional to mu and the motion independent of it (exactly, here: the
 //    CG is scale-equivariant and the step is chosen by displacement).
+//  * Cement rheology: any law of the shared registry (Modules/Core/Rheology, rheology::makeRheology:
+//    newtonian, power-law, carreau). A shear-thinning law is evaluated per particle at its Darcy-scale shear
+//    rate gamma_i = rheology::darcyShearRate(|u_i| phi, k, phi, n) (Christopher & Middleman 1965, the voxel
+//    model's per voxel), and mu_i enters the pressure matrix itself (mobility k / mu_i in its rows, the
+//    harmonic mean of two particles' in a pair, the drag implicit in the solve): each step takes
+//    kPicardRounds solves, the viscosities from the previous round's Darcy speeds (of p alone, not the
+//    density correction). The cannula's drop is the law's tube integral (Rabinowitsch-Mooney, TubeFlow.h).
+//    Curing (a time factor) is refused with one line: not built here yet.
 //  * Particles on a lattice of spacing d = 2 particle_radius_mm each carry a fixed cement volume phi d^3:
 //    the cement's volume is the count times that, exact; the emitted volume is inserted one particle at a
 //    time as it accumulates.
@@ -68,6 +77,8 @@
 #include "cementsph/scene/InjectionModel.h"
 #include "../PointArrays.h"
 
+#include "cementsph/rheology/Rheology.h"
+#include "cementsph/rheology/TubeFlow.h"
 #include "cementsph/sph/HagenPoiseuille.h"
 #include "cementsph/sph/Simulation.h"
 
@@ -97,6 +108,7 @@ constexpr double kHOverD = 1.5;          // smoothing length / lattice spacing
 constexpr double kMinOpenShare = 0.05;  // the open share of a support never counts as less (cementShare)
 constexpr double kMinTheta = 0.2;        // ghost-fluid: smallest share of the way to a ghost (conditioning)
 constexpr double kRelaxSteps = 4.0;      // density-invariant relaxation time / dt
+constexpr int kPicardRounds = 2;         // pressure solves per step for a shear-thinning cement
 constexpr double kMaxMoveOverD = 0.2;    // largest advective move per step
 constexpr double kShiftA = 2.0;          // Lind et al. 2012: D = A h |u| dt
 constexpr double kMaxShiftOverD = 0.1;   // largest shift per step
@@ -161,9 +173,9 @@ public:
     if (scene.hasSecondTip())
       throw std::invalid_argument("scene: second_tip_withdrawal_mm needs pressure_model \"voxel-darcy\" (particle-darcy "
                                   "has one outlet)");
-    if (scene.viscosityLaw != "newtonian" || scene.curing().kind() != "none")
-      throw std::invalid_argument("scene: viscosity_law \"" + scene.viscosityLaw +
-                                  "\" and curing need pressure_model \"voxel-darcy\" (particle-darcy is Newtonian)");
+    if (scene.curing().kind() != "none")
+      throw std::invalid_argument("scene: curing_model \"" + scene.curing().kind() +
+                                  "\" needs pressure_model \"voxel-darcy\" (particle-darcy has no curing yet)");
     scene_ = &scene;
     solid_ = in.solid;
     rho0_ = in.model.restDensity;
@@ -181,6 +193,10 @@ public:
       throw std::invalid_argument("scene: the pore permeability k0 = h^5 / (Cf d^3) = " + std::to_string(poreK_) +
                                   " m^2 is outside 1e-18 .. 1e-3 m^2 (give pore_permeability_m2)");
     viscosity_ = scene.viscositySchedule();
+    // The cement's law from the shared registry (rheology::makeRheology: every law it holds, with the scene's
+    // bounds; an unknown name or a parameter out of range is its one-line refusal), per particle if it thins.
+    law_ = rheology::makeRheology(scene.viscosityLaw, scene.rheology);
+    shearThinning_ = scene.viscosityLaw != "newtonian";
     const sph::VoxelGrid& g = solid_->grid;
     closed_.assign(g.count(), 0);
     for (std::size_t c = 0; c < g.count(); ++c) closed_[c] = solid_->solid[c];
@@ -188,6 +204,15 @@ public:
     sourceRadius_ = std::max(0.5 * innerDiameter_, d_);
     particleRadius_ = std::cbrt(3.0 / (4 * kPi)) * d_;
     effectiveRadius_ = effectiveOutletRadius(sourceRadius_, particleRadius_);
+    if (shearThinning_) { // the scale of the viscosities: the law at the outlet ball's surface speed
+      referenceViscosity_ = law_->viscosity(
+          rheology::darcyShearRate(flowRate_ / (4 * kPi * sourceRadius_ * sourceRadius_), poreK_, 1.0, law_->flowIndex()));
+      if (scene.viscosityLaw == "power-law")
+        cannulaDrop_ = rheology::powerLawTubePressureDrop(scene.rheology.consistencyPaSn, scene.rheology.flowIndex,
+                                                          cannulaLength_, flowRate_, innerDiameter_);
+      else
+        cannulaDrop_ = rheology::tubePressureDrop(*law_, cannulaLength_, flowRate_, innerDiameter_);
+    }
     if (closedAt(tip_)) throw std::invalid_argument("scene: tip_mm lies in a closed voxel");
     // The outlet ball's lattice sites (filled first, nearest the tip first) and gap candidates (d/2 lattice).
     const int n = int(std::ceil(sourceRadius_ / d_));
@@ -223,21 +248,29 @@ public:
   double time() const override { return time_; }
 
   void advance(double dtMax) override {
-    const double mu = viscosity_->at(time_);
+    const double mu = shearThinning_ ? referenceViscosity_ : viscosity_->at(time_);
     mobility_ = poreK_ / mu;
+    if (!shearThinning_) std::fill(mu_.begin(), mu_.end(), mu);
     if (x_.size() < seeds_.size()) { // the outlet ball fills first: no motion
       const double dt = std::min(dtMax, std::max((double(seeds_.size()) * volume_ - injected()) / flowRate_, 1e-12 * dtMax));
       time_ += dt;
       ++steps_;
-      while (x_.size() < seeds_.size() && double(x_.size() + 1) * volume_ <= injected() * (1 + 1e-12)) add(seeds_[x_.size()], 0.0);
+      while (x_.size() < seeds_.size() && double(x_.size() + 1) * volume_ <= injected() * (1 + 1e-12)) add(seeds_[x_.size()], 0.0, mu);
       solveIfAny();
       outlet_ = {time_, outletPressure(), cannulaDrop(mu)};
       return;
     }
     geometry();
-    solvePressure();
+    // A shear-thinning cement: Picard rounds on the per-particle viscosity (solve, Darcy speeds, the law at
+    // each particle's Darcy-scale shear rate); the first round takes the last step's viscosities.
+    const int rounds = shearThinning_ ? kPicardRounds : 1;
+    for (int k = 0; k < rounds; ++k) {
+      if (k > 0) updateViscosity();
+      solvePressure();
+      velocities();
+    }
+    if (shearThinning_) updateViscosity();
     outlet_ = {time_, outletPressure(), cannulaDrop(mu)};
-    velocities();
     double vmax = 0;
     for (const auto& v : u_) vmax = std::max(vmax, v.norm());
     double dt = dtMax;
@@ -321,12 +354,16 @@ public:
     s.particles = ParticleCounts{x_.size(), 0, 0, 0};
     s.solidVoxelsKept = solid_->solidVoxels;
     s.resistance = scene_->porePermeabilityM2 ? "pore-permeability (scene)" : "pore-permeability (preset drag k0)";
-    s.viscosityLaw = "newtonian";
+    s.viscosityLaw = scene_->viscosityLaw;
     s.pressureIsPhysical = true;
     s.meanSpreadingDistanceMm = spread * 1e3;
     s.massBalanceError = injected() > 0 ? (injected() - cementVolumeM3()) / injected() : 0.0;
     s.fluidInSolidFraction = x_.empty() ? 0.0 : double(inSolid) / double(x_.size());
-    s.finalViscosityPaS = viscosity_->at(time_);
+    s.finalViscosityPaS = shearThinning_ ? referenceViscosity_ : viscosity_->at(time_);
+    if (!mu_.empty()) {
+      e["apparent_viscosity_min_pa_s"] = *std::min_element(mu_.begin(), mu_.end());
+      e["apparent_viscosity_max_pa_s"] = *std::max_element(mu_.begin(), mu_.end());
+    }
     s.leakageAssessed = false;
     addPressureSolverFigures(e, solves_, iterations_, worstResidual_, unconverged_, solveSeconds_);
     e["pore_permeability_m2"] = poreK_;
@@ -468,8 +505,10 @@ private:
     }
   }
 
-  void add(const Eigen::Vector3d& p, double pressure) {
+  void add(const Eigen::Vector3d& p, double pressure, double viscosity) {
     x_.push_back(p);
+    mu_.push_back(viscosity);
+    speed_.push_back(0.0);
     p_.push_back(pressure);
     pc_.push_back(0.0);
     u_.push_back(Eigen::Vector3d::Zero());
@@ -621,12 +660,18 @@ private:
     pairA_.resize(pairI_.size());
     diagA_.assign(n, 0.0);
     const double scale = 1.0 / volume_; // entries ~ 1 / d^2
+    // Each particle's mobility relative to M = k / mu_ref: exactly 1 for a Newtonian cement (so the solve is
+    // the same for any viscosity, scaled); a pair's is the harmonic mean of its two (as the voxel model's faces).
+    rel_.resize(n);
+    const double muRef = poreK_ / M;
+    for (std::size_t i = 0; i < n; ++i) rel_[i] = shearThinning_ ? muRef / mu_[i] : 1.0;
     for (std::size_t q = 0; q < pairI_.size(); ++q) {
       const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
-      pairA_[q] = 2 * omega_[i] * omega_[j] * pairF_[q] * scale;
+      const double m = shearThinning_ ? 2 * rel_[i] * rel_[j] / (rel_[i] + rel_[j]) : 1.0;
+      pairA_[q] = 2 * omega_[i] * omega_[j] * pairF_[q] * scale * m;
       diagA_[i] += pairA_[q], diagA_[j] += pairA_[q];
     }
-    for (std::size_t i = 0; i < n; ++i) diagA_[i] += 2 * omega_[i] * ghostF_[i] * scale;
+    for (std::size_t i = 0; i < n; ++i) diagA_[i] += 2 * omega_[i] * ghostF_[i] * scale * rel_[i];
     const Eigen::Index rows = Eigen::Index(n);
     weights_.assign(n, 0.0);
     double sum = 0;
@@ -702,11 +747,13 @@ private:
     const std::size_t n = x_.size();
     std::vector<Eigen::Matrix3d> B(n);
     std::vector<Eigen::Vector3d> s(n, Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d> sp(n, Eigen::Vector3d::Zero()); // the same sum for p alone (the Darcy speed)
     std::vector<double> pt(n); // the potential the particles move with: p + pc (solvePressure)
     for (std::size_t i = 0; i < n; ++i) pt[i] = p_[i] + pc_[i];
     for (std::size_t i = 0; i < n; ++i) {
       B[i] = ghostB_[i];
       s[i] = -pt[i] * ghostPull_[i]; // ghosts: (p_g - p_i)(x_c - x_i) V_c F/r, p_g - p_i = -p_i / theta
+      sp[i] = -p_[i] * ghostPull_[i];
     }
     for (std::size_t q = 0; q < pairI_.size(); ++q) {
       const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
@@ -716,15 +763,21 @@ private:
       B[i] += wj * rr, B[j] += wi * rr;
       s[i] += wj * (pt[j] - pt[i]) * r;
       s[j] += wi * (pt[j] - pt[i]) * r; // (p_i - p_j)(x_i - x_j)
+      sp[i] += wj * (p_[j] - p_[i]) * r;
+      sp[j] += wi * (p_[j] - p_[i]) * r;
     }
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Vector3d grad;
       const double tr = B[i].trace();
       // Corrected where B is well conditioned (det >= 1e-3 (tr/3)^3; a full support: B = I), else the plain
       // normalised sum (a particle with its neighbours on one side only).
-      if (tr > 0 && B[i].determinant() > 1e-3 * std::pow(tr / 3, 3)) grad = B[i].inverse() * s[i];
-      else grad = tr > 0 ? Eigen::Vector3d(3.0 * s[i] / tr) : Eigen::Vector3d::Zero();
-      u_[i] = -mobility_ * grad;
+      Eigen::Matrix3d inverse = Eigen::Matrix3d::Zero();
+      if (tr > 0 && B[i].determinant() > 1e-3 * std::pow(tr / 3, 3)) inverse = B[i].inverse();
+      else if (tr > 0) inverse = Eigen::Matrix3d::Identity() * (3.0 / tr);
+      grad = inverse * s[i];
+      const double mobility = mobility_ * rel_[i];
+      u_[i] = -mobility * grad;
+      speed_[i] = mobility * (inverse * sp[i]).norm();
     }
   }
 
@@ -772,12 +825,14 @@ private:
     std::vector<double> gap(candidates_.size(), std::numeric_limits<double>::infinity());
     for (std::size_t c = 0; c < candidates_.size(); ++c)
       for (std::size_t i : near) gap[c] = std::min(gap[c], (x_[i] - candidates_[c]).squaredNorm());
-    double pNew = 0; // warm start for the new particles: the outlet pressure
-    pNew = outlet_.tipPa;
+    const double pNew = outlet_.tipPa; // warm start for the new particles: the outlet pressure
+    double muNew = 0; // and the viscosity of the cement about the outlet
+    for (std::size_t i : near) muNew += mu_[i];
+    muNew = near.empty() ? (shearThinning_ ? referenceViscosity_ : viscosity_->at(time_)) : muNew / double(near.size());
     for (std::size_t k = 0; k < due; ++k) {
       const std::size_t best = std::size_t(std::max_element(gap.begin(), gap.end()) - gap.begin());
       const Eigen::Vector3d p = candidates_[best];
-      add(p, pNew);
+      add(p, pNew, muNew);
       for (std::size_t c = 0; c < candidates_.size(); ++c) gap[c] = std::min(gap[c], (p - candidates_[c]).squaredNorm());
     }
   }
@@ -792,7 +847,15 @@ private:
   }
 
   double cannulaDrop(double mu) const {
+    if (shearThinning_) return cannulaDrop_; // the law's tube integral (Rabinowitsch-Mooney), once at start
     return sph::hagenPoiseuillePressureDrop(mu, cannulaLength_, flowRate_, innerDiameter_);
+  }
+
+  // Each particle's viscosity: the law at its Darcy-scale shear rate (rheology::darcyShearRate of its Darcy
+  // speed |u| phi, phi = 1 in a pore voxel), as the voxel model's per voxel.
+  void updateViscosity() {
+    for (std::size_t i = 0; i < x_.size(); ++i)
+      mu_[i] = law_->viscosity(rheology::darcyShearRate(speed_[i], poreK_, 1.0, law_->flowIndex()));
   }
 
   const SceneConfig* scene_ = nullptr;
@@ -813,6 +876,10 @@ private:
   // Particles.
   std::vector<Eigen::Vector3d> x_, u_;
   std::vector<double> p_, pc_, birth_, weights_; // Darcy pressure, density correction (solvePressure)
+  std::vector<double> mu_, speed_, rel_; // viscosity [Pa s], Darcy speed [m/s], mobility / (k / mu_ref)
+  std::unique_ptr<rheology::Rheology> law_;
+  bool shearThinning_ = false;
+  double referenceViscosity_ = 0, cannulaDrop_ = 0;
   // Geometry of the step.
   std::vector<int> pairI_, pairJ_;
   std::vector<double> pairF_, pairW_, ghostF_, omega_, pairA_, diagA_;
@@ -832,7 +899,9 @@ std::unique_ptr<InjectionModel> makeParticleDarcyInjectionModel() { return std::
 // permeability (or the preset's drag through k0 = h^5 / (Cf d^3)), and the law and curing only to refuse any but
 // a Newtonian cement.
 InjectionModelRegistry::SceneKeys particleDarcySceneKeys() {
-  return {"particle_radius_mm", "drag_coefficient", "pore_permeability_m2", "viscosity_law", "curing_model"};
+  return {"particle_radius_mm", "drag_coefficient", "pore_permeability_m2", "viscosity_law", "curing_model",
+          "consistency_pa_s_n", "flow_index", "zero_shear_viscosity_pa_s", "infinite_shear_viscosity_pa_s",
+          "carreau_time_constant_s"};
 }
 
 } // namespace cementsph::scene
