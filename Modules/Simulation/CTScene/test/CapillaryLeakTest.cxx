@@ -13,13 +13,20 @@
 //    moves by whole voxels, and the excess is a few voxels), so the leak at 400 Pa s is below that at 50 Pa s by
 //    at least 3/4 of the 50 Pa s excess; the excess at 50 Pa s is at least one voxel of cement (1.5 mm^3), so the
 //    drop is not the grid's noise. Ca itself is proportional to the viscosity (same shape, same p_e): 8 within 5 %;
-//  * marrow fat (the lowest entry pressure of all, about 25 Pa) attracts the cement but is bone, not a leak.
+//  * marrow fat (the lowest entry pressure of all, about 25 Pa) attracts the cement but is bone, not a leak;
+//  * the throat rule on continuum bone: uniform 150 HU bone in a cortical box (ContinuumBoneTest's block), whose
+//    front has the entry pressure 2 sigma cos(theta) sqrt(phi / (8 k)) with phi and k of the calibration written
+//    out here (Kozeny-Carman, d 0.3 mm; to float precision), halved at theta 60 degrees; and a uniform entry
+//    pressure shifts the tip pressure by exactly p_e and leaves the fill (to the solver's tolerance: 2 % of p_e).
 #include "cementsph/phantom/VertebraPhantom.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include <gtest/gtest.h>
 
+#include <itkImage.h>
+
 #include <array>
+#include <cmath>
 #include <cstdio>
 
 using namespace cementsph;
@@ -101,4 +108,62 @@ TEST(CapillaryLeak, MarrowFatDrawsTheCementButIsNotALeak) {
   EXPECT_NEAR(m.at("cement_volume_ml").get<double>(), 0.2, 0.002);
   EXPECT_EQ(leak(m), 0.0) << m.at("leakage_sites").dump();
   EXPECT_EQ(m.at("leak_risk").at("leak_flux_fraction").get<double>(), 0.0);
+}
+
+namespace {
+
+// 60^3 voxels of 0.5 mm: 150 HU bone inside a 2-voxel shell of 1000 HU cortex.
+imaging::ImageType::Pointer uniformBone() {
+  auto img = imaging::ImageType::New();
+  imaging::ImageType::RegionType region;
+  imaging::ImageType::SizeType size;
+  size.Fill(60);
+  region.SetSize(size);
+  img->SetRegions(region);
+  img->SetSpacing(0.5);
+  img->Allocate();
+  for (int k = 0; k < 60; ++k)
+    for (int j = 0; j < 60; ++j)
+      for (int i = 0; i < 60; ++i) {
+        const bool shell = std::min({i, j, k}) < 2 || std::max({i, j, k}) > 57;
+        img->SetPixel({{i, j, k}}, shell ? 1000.f : 150.f);
+      }
+  return img;
+}
+
+json runUniform(const imaging::ImageType* image, double tension, double angleDeg) {
+  return scene::runInjection(image,
+                             scene::sceneFromJson({{"tip_mm", {15, 15, 15}},
+                                                   {"direction", {0, 0, 1}},
+                                                   {"cannula_wall", false},
+                                                   {"volume_ml", 0.3},
+                                                   {"flow_rate_ml_per_s", 0.05},
+                                                   {"viscosity_pa_s", 100},
+                                                   {"capillary_tension_n_per_m", tension},
+                                                   {"contact_angle_deg", angleDeg},
+                                                   {"snapshot_interval_s", 1000}}),
+                             {})
+      .metrics;
+}
+
+} // namespace
+
+TEST(CapillaryLeak, ContinuumThroatsAreTheCapillaryBundlesAndShiftTheTipPressure) {
+  const auto image = uniformBone();
+  const json none = runUniform(image, 0.0, 0.0), flat = runUniform(image, 0.025, 0.0),
+             tilted = runUniform(image, 0.025, 60.0);
+  ASSERT_EQ(flat.at("bone_model"), "continuum");
+  const double phi = 1.0 - 150.0 / 1400.0, d = 0.3e-3;
+  const double k = d * d * phi * phi * phi / (180.0 * (1 - phi) * (1 - phi));
+  const double pe = 2 * 0.025 * std::sqrt(phi / (8 * k));
+  const double measured = flat.at("capillary").at("front_entry_pressure_pa").get<double>();
+  const double tipWith = flat.at("final_tip_pressure_pa").get<double>();
+  const double tipWithout = none.at("final_tip_pressure_pa").get<double>();
+  std::printf("uniform bone: front entry pressure %.4f Pa against %.4f Pa; tip %.2f against %.2f Pa + p_e\n",
+              measured, pe, tipWith, tipWithout);
+  EXPECT_NEAR(measured / pe, 1.0, 1e-6);
+  EXPECT_NEAR(tilted.at("capillary").at("front_entry_pressure_pa").get<double>() / pe, 0.5, 1e-6); // cos 60 degrees
+  EXPECT_NEAR(tipWith - tipWithout, pe, 0.02 * pe);
+  EXPECT_NEAR(flat.at("mean_spreading_distance_mm").get<double>(), none.at("mean_spreading_distance_mm").get<double>(),
+              1e-6);
 }
