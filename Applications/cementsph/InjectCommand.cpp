@@ -94,24 +94,22 @@ std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
 // cement_slices.png: through the largest leak if there is one, else through the tip; the cannula, each leak in its
 // site class's colour (the nearest site of metrics.json) and, with a label map, the target vertebra's outline.
 void drawCementSlices(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
-  const std::array<double, 3> centre =
-      largestLeakMm(m).value_or(std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()});
   const auto sim = imaging::readVolume((out / "simulated_ct.nrrd").string());
   const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
-  rendering::CementSlicesOptions options;
-  options.tipMm = std::array<double, 3>{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
-  const Eigen::Vector3d d = scene.direction.normalized();
-  options.directionUnit = std::array<double, 3>{d.x(), d.y(), d.z()};
+  rendering::InjectionMarks marks; // the same marks as plan's best/cement_slices.png
+  marks.tipMm = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
+  marks.direction = {scene.direction.x(), scene.direction.y(), scene.direction.z()};
   for (const auto& site : m.value("leakage_sites", json::array()))
-    options.leakSites.push_back({site["position_mm"].get<std::array<double, 3>>(), site["site_class"].get<std::string>()});
+    marks.leaks.push_back({{site["position_mm"].get<std::array<double, 3>>(), site["site_class"].get<std::string>()},
+                           site["volume_ml"].get<double>()});
   // The label map is on the input CT's grid, as simulated_ct.nrrd is; the vertebra is its label at the tip, or
   // label_table's target_vertebra.
   const auto anatomy = scene.labelsPath.empty() ? nullptr : imaging::readVolume(scene.labelsPath);
   const auto anatomyVtk = anatomy ? imaging::toVtk(anatomy.GetPointer()) : nullptr;
-  options.vertebraMask = anatomyVtk;
-  if (scene.labelTable.is_object()) options.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
-  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), centre, png,
-                               options);
+  marks.vertebraMask = anatomyVtk;
+  if (scene.labelTable.is_object()) marks.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
+  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), marks.centreMm(),
+                               png, marks.options());
 }
 
 // cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the

@@ -152,8 +152,15 @@ int runPlan(const PlanArgs& a) {
     const scene::InjectionRunResult run = planning::runBestPlan(image, plan, r, out / "best");
     pictures.draw("best/cement_slices.png", out / "best" / "cement_slices.png", [&](const fs::path& png) {
       const auto labels = planning::labelsWithUncoveredTarget(run, r.targetCentreMm, r.targetRadiusMm);
+      // inject's marks (the cannula, each leak in its class's colour), through the target.
+      rendering::InjectionMarks marks;
+      marks.tipMm = {plan.best.tipMm.x(), plan.best.tipMm.y(), plan.best.tipMm.z()};
+      marks.direction = {r.direction.x(), r.direction.y(), r.direction.z()};
+      for (const auto& site : run.summary.leakageSites)
+        marks.leaks.push_back({{site.positionMm, site.siteClass}, site.volumeMl});
       rendering::writeCementSlices(imaging::toVtk(run.simulatedCt.GetPointer()), labels,
-                                   {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()}, png);
+                                   {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()}, png,
+                                   marks.options());
     });
   }
   printSummary(plan, a.out);

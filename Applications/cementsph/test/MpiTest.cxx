@@ -184,7 +184,7 @@ TEST(MpiPlan, ThreeRanksGiveTheSerialPlanOnTheVertebra) {
   auto args = [](const fs::path& out) {
     return std::vector<std::string>{
         "plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
-        "--entry-mm", "41,49.08,22.5", "--direction", "-0.3,-0.954,0", "--min-depth-mm", "10", "--max-depth-mm", "30",
+        "--entry-mm", "48.5,52.4,22.5", "--min-depth-mm", "10", "--max-depth-mm", "36",
         "--target-mm", "32,21,22.5", "--target-radius-mm", "6", "--min-volume-ml", "1", "--max-volume-ml", "4",
         "--max-syringe-mpa", "3", "--max-leakage-ml", "0", "--quiet", "--out", out.string()};
   };

@@ -4,8 +4,11 @@
 //  * on the vertebra phantom, a transpedicular trajectory, a target sphere in the body and no leakage
 //    allowed: the best plan's tip lies inside the target, it holds the limits (no leak, syringe under
 //    3 MPa), it covers most of the target, and plan.json / plan.csv list every evaluation;
-//  * a trajectory that leaves the CT is one clear line, exit 1, and nothing written.
+//  * a trajectory that leaves the CT is one clear line, exit 1, and nothing written; so is one through the
+//    spinal canal (the trajectory check, PlanTrajectory.h); the transpedicular one is clear, and the best plan's
+//    cement_slices.png draws its tip and trajectory.
 #include "ProgramRun.h"
+#include "RenderingTestSupport.h"
 #include "cementsph/planning/InjectionPlanner.h"
 
 #include <gtest/gtest.h>
@@ -16,8 +19,10 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 namespace fs = std::filesystem;
 
@@ -67,7 +72,7 @@ TEST(Plan, OnTheVertebraTheTipLandsInTheTargetWithinTheLimits) {
   const auto r = cementsph::testing::runProgram(
       CEMENTSPH_EXECUTABLE,
       {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
-       "--entry-mm", "41,49.08,22.5", "--direction", "-0.3,-0.954,0", "--min-depth-mm", "10", "--max-depth-mm", "30",
+       "--entry-mm", "48.5,52.4,22.5", "--min-depth-mm", "10", "--max-depth-mm", "36",
        "--target-mm", "32,21,22.5", "--target-radius-mm", "6", "--min-volume-ml", "1", "--max-volume-ml", "4",
        "--max-syringe-mpa", "3", "--max-leakage-ml", "0", "--quiet", "--out", out.string()});
   ASSERT_EQ(r.exitCode, 0) << r.err;
@@ -89,6 +94,31 @@ TEST(Plan, OnTheVertebraTheTipLandsInTheTargetWithinTheLimits) {
   for (std::string line; std::getline(csv, line);) ++rows;
   EXPECT_EQ(rows, plan.at("evaluations").size() + 1);
   for (const char* f : {"convergence.png", "best/metrics.json", "best/cement_slices.png"}) EXPECT_TRUE(fs::exists(out / f)) << f;
+  // The trajectory passes lateral to the canal through the arch (PlanTrajectoryTest has the geometry): clear.
+  EXPECT_EQ(plan.at("trajectory_check").at("verdict").get<std::string>(), "clear") << plan.at("trajectory_check");
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  // best/cement_slices.png draws the cannula as inject's does (CementSlices.h's colours): a tip ring on each of
+  // the three panels (radius 6 px, 2 px thick: pi (7^2 - 5^2) = 75 px each) and the projected shaft.
+  std::map<std::array<int, 3>, int> colours;
+  for (const auto& rgb : cementsph::rendering::test::readPicture(out / "best" / "cement_slices.png").pixels) ++colours[rgb];
+  const std::array<int, 3> ring{255, 255, 0}, shaft{0, 220, 255};
+  EXPECT_GE(colours[ring], 3 * 70) << "tip rings missing";
+  EXPECT_GE(colours[shaft], 20) << "no trajectory drawn";
+}
+
+// A midline entry from behind runs through the lamina into the spinal canal: refused before any injection,
+// one line naming the canal and what to do, exit 1, nothing written.
+TEST(Plan, AnEntryThroughTheCanalIsRefused) {
+  const fs::path out = scratch("plan-canal");
+  const auto r = cementsph::testing::runProgram(
+      CEMENTSPH_EXECUTABLE,
+      {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
+       "--entry-mm", "32,62,22.5", "--target-mm", "32,21,22.5", "--out", out.string()});
+  EXPECT_EQ(r.exitCode, 1) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("crosses the spinal canal"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--allow-canal-crossing"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(Plan, ATrajectoryThatLeavesTheCtIsOneClearLine) {
@@ -111,7 +141,7 @@ TEST(Plan, ASecondTipOnTheTrajectoryHoldsTheLimits) {
   const auto r = cementsph::testing::runProgram(
       CEMENTSPH_EXECUTABLE,
       {"plan", "--ct", (kData / "vertebra-phantom" / "pre.nrrd").string(), "--scene", (kData / "scenes" / "paper.json").string(),
-       "--entry-mm", "41,49.08,22.5", "--direction", "-0.3,-0.954,0", "--min-depth-mm", "10", "--max-depth-mm", "30",
+       "--entry-mm", "48.5,52.4,22.5", "--min-depth-mm", "10", "--max-depth-mm", "36",
        "--target-mm", "32,21,22.5", "--target-radius-mm", "6", "--min-volume-ml", "1", "--max-volume-ml", "4",
        "--max-syringe-mpa", "3", "--max-leakage-ml", "0", "--second-tip", "--max-evaluations", "60", "--quiet",
        "--out", out.string()});
@@ -123,7 +153,8 @@ TEST(Plan, ASecondTipOnTheTrajectoryHoldsTheLimits) {
   EXPECT_TRUE(best.at("within_limits").get<bool>());
   EXPECT_DOUBLE_EQ(best.at("leakage_volume_ml").get<double>(), 0.0);
   EXPECT_GT(best.at("coverage").get<double>(), 0.8);
-  const Eigen::Vector3d entry(41, 49.08, 22.5), axis = Eigen::Vector3d(-0.3, -0.954, 0).normalized();
+  // No --direction: the trajectory runs from the entry towards the target.
+  const Eigen::Vector3d entry(48.5, 52.4, 22.5), axis = (Eigen::Vector3d(32, 21, 22.5) - entry).normalized();
   std::size_t withSecondTip = 0;
   for (const auto& e : plan.at("evaluations")) {
     if (e.at("second_tip_mm").is_null()) continue;

@@ -132,6 +132,27 @@ void drawOutline(PixelCanvas& canvas, const std::vector<char>& inside, int w, in
 
 } // namespace
 
+CementSlicesOptions InjectionMarks::options(CementSlicesOptions base) const {
+  base.tipMm = tipMm;
+  const double norm = std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
+  base.directionUnit = std::array<double, 3>{direction[0] / norm, direction[1] / norm, direction[2] / norm};
+  for (const Leak& leak : leaks) base.leakSites.push_back(leak.site);
+  base.vertebraMask = vertebraMask;
+  base.vertebraLabel = vertebraLabel;
+  return base;
+}
+
+std::array<double, 3> InjectionMarks::centreMm() const {
+  std::array<double, 3> at = tipMm;
+  double largest = 0;
+  for (const Leak& leak : leaks)
+    if (leak.volumeMl > largest) {
+      largest = leak.volumeMl;
+      at = leak.site.positionMm;
+    }
+  return at;
+}
+
 void writeCementSlices(vtkImageData* ct, vtkImageData* labels, const std::array<double, 3>& centreMm,
                        const std::filesystem::path& png, const CementSlicesOptions& o) {
   if (!ct || !labels) throw std::invalid_argument("cement slices: no image");

@@ -86,13 +86,14 @@ TrajectoryCheck checkTrajectory(const Anatomy& anatomy, const std::array<double,
       if (!inVertebra) check.reachesVertebraMm = depth(i);
       inVertebra = true;
     } else {
-      // On the approach soft tissue and air are expected; inside, they must be more than a seam, and a run that
-      // ends the shaft (the deepest tip out of the bone) counts whatever its length.
-      const bool seam = softOrAir(c) && depth(j) - depth(i) + check.stepMm < options.minBreachMm && j + 1 < samples;
+      // On the approach soft tissue and air are expected; inside, they must be more than a seam (a run's extent
+      // is from its first sample to its last: one voxel along the shaft spans a voxel less one step), and a run
+      // that ends the shaft (the deepest tip out of the bone) counts whatever its length.
+      const bool seam = softOrAir(c) && depth(j) - depth(i) < options.minBreachMm && j + 1 < samples;
       // One crossing, not two, where a voxel of another class (the canal's partial-volume rim) splits it.
       if (!(softOrAir(c) && !inVertebra) && !seam) {
         if (!check.crossings.empty() && check.crossings.back().tissue == c &&
-            depth(i) - check.crossings.back().toDepthMm < options.minBreachMm)
+            depth(i) - check.crossings.back().toDepthMm - 2 * check.stepMm < options.minBreachMm)
           check.crossings.back().toDepthMm = depth(j);
         else
           check.crossings.push_back({c, leakKind(c), depth(i), depth(j), at(i)});

@@ -69,6 +69,26 @@ struct CementSlicesOptions {
   int vertebraLabel = -1;
 };
 
+// What one injection draws on its slices, the same for inject's cement_slices.png and plan's best/: the cannula
+// (tip ring and shaft), each leak site in its class's colour (with its volume, which picks the slices' centre)
+// and, where known, the vertebra (a label map on the CT's grid: --labels, or the bone rule's anatomy_labels.nrrd
+// with its target_vertebra class 1).
+struct InjectionMarks {
+  std::array<double, 3> tipMm{0, 0, 0};
+  std::array<double, 3> direction{0, 0, 1}; // from the entry towards the tip, any length
+  struct Leak {
+    LeakSiteMark site;
+    double volumeMl = 0;
+  };
+  std::vector<Leak> leaks;
+  vtkImageData* vertebraMask = nullptr;
+  int vertebraLabel = -1;
+  // `base` with the cannula, the leak sites and the vertebra set.
+  CementSlicesOptions options(CementSlicesOptions base = {}) const;
+  // Where inject's slices cross: the largest leak's centre (the leak a surgeon must see), else the tip.
+  std::array<double, 3> centreMm() const;
+};
+
 // ct: scalar HU image; labels: the same grid, 0 no cement, 1 cement in bone, 2 leaked cement (as
 // cement_labels.nrrd), 3 a target region without cement (yellow; `cementsph plan`). centreMm: the slices'
 // crossing point in the CT's physical frame (mm; the voxel axes run along the patient axes, possibly permuted
