@@ -1,10 +1,12 @@
 // `cementsph inject` writes the pictures that fit an injection (issue 5): tip_pressure.png (paper Fig. 10)
 // always, and with the scene key simulated_ct_snapshots the X-ray sequence of the snapshots in DIR/xray
 // (Fig. 12: xray_frames.png, projected_area.png, sequence.csv). Run headless (DISPLAY unset).
-// Oracles: the pictures against baselines (Testing/Data/Baselines/inject_*.png, made from this scene, which
-// sets every model key itself so that a change of an engine default shows as a changed picture; regenerate
-// with CEMENTSPH_UPDATE_BASELINES=1 after an intended change and look at them); the X-ray area of the first
-// frame is 0 mm^2 exactly (no cement yet: the frame minus itself).
+// Regression (InjectPicturesRegression): the pictures against baselines (Testing/Data/Baselines/inject_*.png,
+// made from this scene, which sets every model key itself so that a change of an engine default shows as a
+// changed picture; regenerate after an intended change with
+//   CEMENTSPH_UPDATE_BASELINES=1 env -u DISPLAY build/bin/InjectPicturesTest --gtest_filter='InjectPicturesRegression.*'
+// and look at them). Oracle: the X-ray area of the first frame is 0 mm^2 exactly (no cement yet: the frame
+// minus itself); what the pictures draw is checked against oracles elsewhere (Testing/Data/Baselines/README.md).
 #include "ProgramRun.h"
 #include "RenderingTestSupport.h"
 #include "ScaffoldCT.h"
@@ -57,7 +59,7 @@ std::vector<std::string> lastCsvRow(const fs::path& csv, std::size_t* rows) {
 
 } // namespace
 
-TEST(InjectPictures, TipPressureAndTheXraySequenceOfTheSnapshots) {
+TEST(InjectPicturesRegression, TipPressureAndTheXraySequenceOfTheSnapshots) {
   const fs::path dir = scratch("inject-pictures");
   const auto r = run({"inject", "--ct", (dir / "ct.nrrd").string(), "--scene", (dir / "scene.json").string(), "--out",
                       (dir / "out").string(), "--snapshot-interval-s", "0.5", "--quiet", "--set",

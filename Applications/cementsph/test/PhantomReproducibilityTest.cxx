@@ -1,3 +1,9 @@
+// Regression test (PhantomRegression): its expected values are the bundled phantom, an earlier run of the same
+// code. After an intended change to the phantom, regenerate the baseline by the command truth.json records, from
+// the source folder:
+//   build/bin/$(python3 -c 'import json; print(json.load(open("Data/foam-phantom/truth.json"))["command"])')
+// The phantom's properties are checked against oracles in FoamPhantom.* (porosity, noise sigma, the affine),
+// PhantomRegistration.* (the misalignment recovered) and PhantomCommand.* (Testing/Data/Baselines/README.md).
 // Data/foam-phantom is reproducible: the command its truth.json records, run again into a scratch folder,
 // makes the same pre.nrrd, post.nrrd and truth.json (generation times aside). Run with 2 threads while the
 // bundled files were made with 1, so it also checks that the phantom does not depend on the thread count.
@@ -43,7 +49,7 @@ nlohmann::json comparable(nlohmann::json t) {
 
 } // namespace
 
-TEST(PhantomReproducibility, TheRecordedCommandRemakesDataFoamPhantom) {
+TEST(PhantomRegression, TheRecordedCommandRemakesDataFoamPhantom) {
   const fs::path data = fs::path(CEMENTSPH_TEST_DATA_DIR) / "foam-phantom";
   const nlohmann::json truth = readJson(data / "truth.json");
   ASSERT_TRUE(truth.contains("command")) << "truth.json records no command";

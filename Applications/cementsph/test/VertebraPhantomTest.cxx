@@ -1,5 +1,8 @@
 // The clinical vertebra phantom (`cementsph phantom --kind vertebra`, VertebraPhantom.h) and its injection:
-//  * Data/vertebra-phantom is made again by the command its truth.json records: pre.nrrd voxel for voxel;
+//  * regression (VertebraPhantomRegression): Data/vertebra-phantom is made again by the command its truth.json
+//    records: pre.nrrd voxel for voxel (regenerate after an intended change, from the source folder:
+//    build/bin/$(python3 -c 'import json; print(json.load(open("Data/vertebra-phantom/truth.json"))["command"])'));
+//    the two tests below are its oracles;
 //  * the geometry is where the header says: trabecular bone at the body's centre (90 HU +- 4 sigma of the
 //    10 HU noise), cortex in the side wall (partial volume worked out below), CSF in the canal; the DICOM series reads back as the NRRD (to the 1 HU of int16 storage);
 //  * the plan of its truth.json with the continuum bone model: an intact posterior wall leaks nothing, the
@@ -54,7 +57,7 @@ nlohmann::json inject(const fs::path& ct, const nlohmann::json& plan, const fs::
 }
 } // namespace
 
-TEST(VertebraPhantom, TheRecordedCommandRemakesTheBundledOne) {
+TEST(VertebraPhantomRegression, TheRecordedCommandRemakesTheBundledOne) {
   const nlohmann::json truth = readJson(kData / "truth.json");
   std::string command = truth.at("command").get<std::string>();
   const fs::path out = scratch("vertebra-again");

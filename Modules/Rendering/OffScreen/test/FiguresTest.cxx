@@ -124,7 +124,7 @@ void writePressureCsv(const std::filesystem::path& csv, double scale) {
 
 } // namespace
 
-TEST(SurfaceComparison, MatchesBaseline) {
+TEST(SurfaceComparisonRegression, MatchesBaseline) {
   forgetDisplay();
   const auto png = scratchFolder() / "surfaces.png";
   const auto t = std::chrono::steady_clock::now();
@@ -134,7 +134,7 @@ TEST(SurfaceComparison, MatchesBaseline) {
   expectMatchesBaseline(png, "surface_comparison.png", kGlTolerance);
 }
 
-TEST(SurfaceComparison, ShiftedSimulationDoesNotMatchBaseline) {
+TEST(SurfaceComparisonRegression, ShiftedSimulationDoesNotMatchBaseline) {
   forgetDisplay();
   const auto png = scratchFolder() / "shifted.png";
   renderSpheres(2.3, png);
@@ -168,7 +168,7 @@ TEST(SliceComparison, PositionsAreEvery5mmThroughTheCement) {
 }
 
 // No GL is involved, so the pixels must be identical to the baseline's.
-TEST(SliceComparison, MatchesBaselineExactly) {
+TEST(SliceComparisonRegression, MatchesBaselineExactly) {
   forgetDisplay();
   const auto png = scratchFolder() / "slices.png";
   const auto t = std::chrono::steady_clock::now();
@@ -185,7 +185,7 @@ TEST(SliceComparison, MatchesBaselineExactly) {
   }
 }
 
-TEST(SliceComparison, DifferentSimulationDoesNotMatchBaseline) {
+TEST(SliceComparisonRegression, DifferentSimulationDoesNotMatchBaseline) {
   const auto png = scratchFolder() / "slices.png";
   SliceComparisonOptions bare;
   bare.annotate = false;
@@ -210,7 +210,7 @@ TEST(SliceComparison, PostOnlyGivesOneRowAndBadInputsThrow) {
   EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
 }
 
-TEST(TipPressurePlot, MatchesBaseline) {
+TEST(TipPressurePlotRegression, MatchesBaseline) {
   forgetDisplay();
   const auto dir = scratchFolder();
   writePressureCsv(dir / "tip.csv", 1.0);
@@ -221,7 +221,7 @@ TEST(TipPressurePlot, MatchesBaseline) {
   expectMatchesBaseline(dir / "tip.png", "tip_pressure.png", 2e-4);
 }
 
-TEST(TipPressurePlot, DifferentCurveDoesNotMatchBaseline) {
+TEST(TipPressurePlotRegression, DifferentCurveDoesNotMatchBaseline) {
   forgetDisplay();
   const auto dir = scratchFolder();
   writePressureCsv(dir / "tip.csv", 0.6);

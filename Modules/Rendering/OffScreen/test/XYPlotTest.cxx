@@ -1,5 +1,5 @@
-// writePlotPng on a machine without a display: exact size, real content, a stored baseline, and input
-// checks that fail cleanly.
+// writePlotPng on a machine without a display: exact size, real content, points where the axes put them (the
+// oracle), a stored baseline (the regression tests), and input checks that fail cleanly.
 #include "RenderingTestSupport.h"
 
 #include "cementsph/rendering/ImageCompare.h"
@@ -12,15 +12,19 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <vector>
 
 using namespace cementsph::rendering;
 using cementsph::rendering::test::expectMatchesBaseline;
 using cementsph::rendering::test::forgetDisplay;
 using cementsph::rendering::test::kBaselineDir;
+using cementsph::rendering::test::readPicture;
 using cementsph::rendering::test::scratchFolder;
 using cementsph::rendering::test::summarisePng;
 
@@ -73,7 +77,106 @@ bool folderIsEmpty(const std::filesystem::path& dir) {
 
 } // namespace
 
-TEST(XYPlot, BasicPlotMatchesBaseline) {
+namespace {
+
+// The centres (mean pixel, x right, y down) of the 8-connected blobs of pixels within `tolerance` of `rgb`.
+std::vector<std::array<double, 2>> blobCentres(const cementsph::rendering::test::Picture& p,
+                                               const std::array<int, 3>& rgb, int tolerance) {
+  auto matches = [&](int x, int y) {
+    const auto c = p.at(x, y);
+    for (std::size_t k = 0; k < 3; ++k)
+      if (std::abs(c[k] - rgb[k]) > tolerance) return false;
+    return true;
+  };
+  std::vector<char> seen(std::size_t(p.width) * std::size_t(p.height), 0);
+  std::vector<std::array<double, 2>> centres;
+  for (int y0 = 0; y0 < p.height; ++y0)
+    for (int x0 = 0; x0 < p.width; ++x0) {
+      if (seen[std::size_t(y0) * std::size_t(p.width) + std::size_t(x0)] || !matches(x0, y0)) continue;
+      double sx = 0, sy = 0, n = 0;
+      std::vector<std::array<int, 2>> stack{{x0, y0}};
+      seen[std::size_t(y0) * std::size_t(p.width) + std::size_t(x0)] = 1;
+      while (!stack.empty()) {
+        const auto [x, y] = stack.back();
+        stack.pop_back();
+        sx += x;
+        sy += y;
+        n += 1;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= p.width || ny >= p.height) continue;
+            char& s = seen[std::size_t(ny) * std::size_t(p.width) + std::size_t(nx)];
+            if (s || !matches(nx, ny)) continue;
+            s = 1;
+            stack.push_back({nx, ny});
+          }
+      }
+      centres.push_back({sx / n, sy / n});
+    }
+  return centres;
+}
+
+// Least-squares line v = a + b u; returns {a, b, largest |residual|}.
+std::array<double, 3> fitLine(const std::vector<double>& u, const std::vector<double>& v) {
+  const double n = double(u.size());
+  double su = 0, sv = 0, suu = 0, suv = 0;
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    su += u[i];
+    sv += v[i];
+    suu += u[i] * u[i];
+    suv += u[i] * v[i];
+  }
+  const double b = (n * suv - su * sv) / (n * suu - su * su), a = (sv - b * su) / n;
+  double worst = 0;
+  for (std::size_t i = 0; i < u.size(); ++i) worst = std::max(worst, std::abs(a + b * u[i] - v[i]));
+  return {a, b, worst};
+}
+
+} // namespace
+
+// The oracle of the plot regression tests: a chart maps data to pixels by an affine map per axis, so the markers
+// of known points must sit on one straight line per axis, x to the right and y upwards, within a pixel and a
+// half (the marker's rasterisation). One series: no legend, so every blob of its colour is a point. The y
+// values are a permutation, so a plot that swapped, sorted or dropped points, or drew y downwards, fails.
+TEST(XYPlot, PointsLandWhereTheAxesPutThem) {
+  forgetDisplay();
+  PlotSpec spec;
+  spec.title = "points";
+  spec.xLabel = "x";
+  spec.yLabel = "y";
+  PlotSeries points;
+  points.name = "points";
+  points.style = PlotSeries::Style::Points;
+  points.rgb = {200, 0, 200};
+  points.x = {1, 2, 3, 4, 5, 6, 7, 8};
+  points.y = {3, 7, 1, 9, 4, 6, 2, 8};
+  spec.series = {points};
+  spec.xMin = 0;
+  spec.xMax = 9;
+  spec.yMin = 0;
+  spec.yMax = 10;
+  const auto png = scratchFolder() / "points.png";
+  writePlotPng(spec, png);
+  auto centres = blobCentres(readPicture(png), {200, 0, 200}, 40);
+  ASSERT_EQ(centres.size(), points.x.size()) << "one marker per point";
+  std::sort(centres.begin(), centres.end());
+  std::vector<double> px, py;
+  for (const auto& c : centres) {
+    px.push_back(c[0]);
+    py.push_back(c[1]);
+  }
+  const auto xFit = fitLine(points.x, px), yFit = fitLine(points.y, py);
+  std::cout << "x: " << xFit[1] << " px per unit, worst " << xFit[2] << " px; y: " << yFit[1] << " px per unit, worst "
+            << yFit[2] << " px\n";
+  EXPECT_GT(xFit[1], 20.0); // 9 units across most of 900 px
+  EXPECT_LT(yFit[1], -20.0); // up the picture is down its rows
+  EXPECT_LT(xFit[2], 1.5);
+  EXPECT_LT(yFit[2], 1.5);
+}
+
+// Regression: the plot against Testing/Data/Baselines/xyplot_basic.png (regenerate: that folder's README.md).
+TEST(XYPlotRegression, BasicPlotMatchesBaseline) {
   forgetDisplay();
   const auto png = scratchFolder() / "xyplot_basic.png";
   writePlotPng(basicSpec(), png);
@@ -82,7 +185,7 @@ TEST(XYPlot, BasicPlotMatchesBaseline) {
 }
 
 // Guards the comparison itself: if this passed, the baseline test would prove nothing.
-TEST(XYPlot, DifferentPlotDoesNotMatchBaseline) {
+TEST(XYPlotRegression, DifferentPlotDoesNotMatchBaseline) {
   forgetDisplay();
   PlotSpec spec = basicSpec();
   for (double& y : spec.series[1].y) y *= 0.5;
@@ -226,14 +329,14 @@ void renderInFreshProcess(const std::string& backend, const std::string& expectB
 
 // The default path on a headless machine: OSMesa, no X server, and the same picture as the baseline
 // (which was drawn through Xvfb + GLX, an independent GL path).
-TEST(RenderBackend, NoDisplayNoXvfbRendersBaselineWithOSMesa) {
+TEST(RenderBackendRegression, NoDisplayNoXvfbRendersBaselineWithOSMesa) {
   const auto png = scratchFolder() / "osmesa.png";
   renderInFreshProcess("", "osmesa", png);
   ASSERT_TRUE(std::filesystem::exists(png));
   expectMatchesBaseline(png, "xyplot_basic.png", kBaselineTolerance);
 }
 
-TEST(RenderBackend, SurfacelessEglRendersBaseline) {
+TEST(RenderBackendRegression, SurfacelessEglRendersBaseline) {
   const auto png = scratchFolder() / "egl.png";
   renderInFreshProcess("egl", "egl", png);
   ASSERT_TRUE(std::filesystem::exists(png));
@@ -241,7 +344,7 @@ TEST(RenderBackend, SurfacelessEglRendersBaseline) {
 }
 
 // The fallback: an X display (a private Xvfb here, since DISPLAY is unset) still renders the baseline.
-TEST(RenderBackend, XFallbackRendersBaseline) {
+TEST(RenderBackendRegression, XFallbackRendersBaseline) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   const auto png = scratchFolder() / "x.png";
   EXPECT_EXIT(

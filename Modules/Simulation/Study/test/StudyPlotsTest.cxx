@@ -60,7 +60,7 @@ TEST(StudyPlots, ErrorVsWallTimeSpecHasOneSeriesPerIntegratorLabelledByRadius) {
   EXPECT_THROW(study::errorVsWallTimeSpec(rows), std::runtime_error);
 }
 
-TEST(StudyPlots, ErrorVsWallTimeMatchesBaseline) {
+TEST(StudyPlotsRegression, ErrorVsWallTimeMatchesBaseline) {
   forgetDisplay();
   const auto png = scratchFolder() / "error_vs_wall_time.png";
   study::writeErrorVsWallTimePlot(paperLikeRows(), png);
@@ -69,7 +69,7 @@ TEST(StudyPlots, ErrorVsWallTimeMatchesBaseline) {
 }
 
 // Guards the comparison: if this passed too, the baseline test would prove nothing.
-TEST(StudyPlots, DifferentErrorsDoNotMatchBaseline) {
+TEST(StudyPlotsRegression, DifferentErrorsDoNotMatchBaseline) {
   forgetDisplay();
   auto rows = paperLikeRows();
   for (auto& r : rows)
@@ -81,14 +81,20 @@ TEST(StudyPlots, DifferentErrorsDoNotMatchBaseline) {
   EXPECT_GT(difference, 2 * kTolerance);
 }
 
-TEST(StudyPlots, SpreadingVsViscosityMatchesBaseline) {
-  forgetDisplay();
+TEST(StudyPlots, SpreadingVsViscositySpecHoldsTheSweepsSpreading) {
   const std::vector<study::StudyRow> sweep{viscosityRow(50, 6.23), viscosityRow(100, 5.78), viscosityRow(200, 5.35),
                                            viscosityRow(400, 4.95)};
   const rendering::PlotSpec spec = study::spreadingVsViscositySpec(sweep);
   ASSERT_EQ(spec.series.size(), 2u);
   EXPECT_EQ(spec.series[0].y, (std::vector<double>{6.23, 5.78, 5.35, 4.95}));
   EXPECT_NEAR(spec.series[1].y[0], 6.63, 1e-12);
+}
+
+// Regression: the drawn plot against Testing/Data/Baselines/study_spreading_vs_viscosity.png (see its README.md).
+TEST(StudyPlotsRegression, SpreadingVsViscosityMatchesBaseline) {
+  forgetDisplay();
+  const std::vector<study::StudyRow> sweep{viscosityRow(50, 6.23), viscosityRow(100, 5.78), viscosityRow(200, 5.35),
+                                           viscosityRow(400, 4.95)};
   const auto png = scratchFolder() / "spreading_vs_viscosity.png";
   study::writeSpreadingVsViscosityPlot(sweep, png);
   expectPlot(png);
