@@ -40,6 +40,11 @@ std::string shown(const std::string& value) {
 // 1e-6..1e6 is a typo.
 constexpr double kMaxInjectionS = 86400.0;
 constexpr double kMaxSnapshots = 10000.0;
+// PMMA cements are injected at 10-3000 Pa.s and set as a dough of 1e4-1e5 Pa.s (Krebs et al. 2005, Baroud et al.
+// 2006): a viscosity above 1e7 Pa.s is a typo, and the run's dimensionless numbers would overflow long before 1e308.
+constexpr double kMaxViscosityPaS = 1e7;
+// Less than a cubic millimetre is below one voxel of any CT the program reads: no spreading to predict.
+constexpr double kMinVolumeMl = 1e-3;
 constexpr double kMinSoundSpeed = 1e-3, kMaxSoundSpeed = 1500.0;
 constexpr double kMinDrag = 1e-6, kMaxDrag = 1e6;
 
@@ -352,6 +357,12 @@ void SceneConfig::validate() const {
   requirePositive(cannulaLengthMm, "cannula_length_mm");
   requirePositive(flowRateMlPerS, "flow_rate_ml_per_s");
   requirePositive(volumeMl, "volume_ml");
+  if (!(volumeMl >= kMinVolumeMl)) {
+    std::ostringstream what;
+    what << "is too small: " << volumeMl << " ml is less than " << kMinVolumeMl
+         << " ml (one cubic millimetre, below a CT voxel): give the volume in ml";
+    fail("volume_ml", what.str());
+  }
   if (!(injectionDurationS() <= kMaxInjectionS)) {
     std::ostringstream what;
     what << "is too small: " << flowRateMlPerS << " ml/s takes " << injectionDurationS() << " s for volume_ml "
@@ -360,10 +371,17 @@ void SceneConfig::validate() const {
     fail("flow_rate_ml_per_s", what.str());
   }
   requirePositive(viscosityPaS, "viscosity_pa_s");
+  if (!(viscosityPaS <= kMaxViscosityPaS)) {
+    std::ostringstream what;
+    what << "is too large: " << viscosityPaS << " Pa.s is above " << kMaxViscosityPaS
+         << " Pa.s (a setting PMMA dough is 1e4-1e5 Pa.s): give the viscosity in Pa.s";
+    fail("viscosity_pa_s", what.str());
+  }
   if (viscosityRatePaPerS) requirePositive(*viscosityRatePaPerS, "viscosity_rate_pa_per_s");
   if (!viscosityTable.empty()) {
     for (std::size_t k = 0; k < viscosityTable.size(); ++k) {
-      if (!(viscosityTable[k].second > 0)) fail("viscosity_table", "viscosities must be > 0");
+      if (!(viscosityTable[k].second > 0 && viscosityTable[k].second <= kMaxViscosityPaS))
+        fail("viscosity_table", "viscosities must be > 0 and at most 1e7 Pa.s");
       if (k > 0 && !(viscosityTable[k].first > viscosityTable[k - 1].first))
         fail("viscosity_table", "times must increase strictly");
     }

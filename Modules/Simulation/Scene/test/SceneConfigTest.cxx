@@ -493,3 +493,31 @@ TEST(SceneConfig, ARefusedSettingNamesTheOptionThatGaveIt) {
             0u)
       << errorOf(viaSet);
 }
+
+// Physical limits on the cement (SceneConfig.cpp): a viscosity above 1e7 Pa.s (a setting PMMA dough is 1e4-1e5)
+// and a volume below 1e-3 ml (one cubic millimetre) are refused naming the key; the limits themselves and the
+// bundled cements' range pass. 1e308 Pa.s once reached the run and came back as a non-finite "marrow viscosity
+// ratio" blamed on the flow rate.
+TEST(SceneConfig, ViscosityAndVolumeOutsideTheirPhysicalRangeAreRefused) {
+  for (double mu : {1e7 * 1.000001, 1e9, 1e308}) {
+    json j = minimal();
+    j["viscosity_pa_s"] = mu;
+    expectError(j, "viscosity_pa_s");
+  }
+  json table = minimal();
+  table["viscosity_table"] = json::array({json::array({0.0, 100.0}), json::array({60.0, 2e7})});
+  expectError(table, "viscosity_table");
+  for (double v : {1e-30, 0.000999}) {
+    json j = minimal();
+    j["volume_ml"] = v;
+    expectError(j, "volume_ml");
+  }
+  for (double mu : {1e7, 3000.0, 10.0}) {
+    json j = minimal();
+    j["viscosity_pa_s"] = mu;
+    EXPECT_EQ(errorOf(j), "") << mu;
+  }
+  json smallest = minimal();
+  smallest["volume_ml"] = 1e-3;
+  EXPECT_EQ(errorOf(smallest), "");
+}
