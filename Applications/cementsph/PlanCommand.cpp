@@ -1,8 +1,8 @@
 // cementsph plan: the tip depth along a trajectory and the volume that cover a target within the syringe
 // and leakage limits (Modules/Simulation/Planning/InjectionPlanner.h). Writes DIR/plan.json (the best plan,
 // every evaluation, the optimiser's stop reason), DIR/plan.csv, DIR/convergence.png and DIR/best/ (the best
-// plan's injection, with cement_slices.png through the target: cement blue, leaks red, the uncovered target
-// yellow).
+// plan's injection, with cement_slices.png through the target: cement blue, leaks in their classes' colours, the
+// uncovered target yellow, the cannula and the vertebra's outline as inject draws them).
 // A thin layer: the planner, plan.json/plan.csv and the best plan's run are CementSPH::Planning's
 // (InjectionPlanner.h, PlanOutputs.h); this file parses the options, draws the pictures and prints the summary.
 #include "CommandRegistry.h"
@@ -158,7 +158,11 @@ int runPlan(const PlanArgs& a) {
       marks.direction = {r.direction.x(), r.direction.y(), r.direction.z()};
       for (const auto& site : run.summary.leakageSites)
         marks.leaks.push_back({{site.positionMm, site.siteClass}, site.volumeMl});
-      rendering::writeCementSlices(imaging::toVtk(run.simulatedCt.GetPointer()), labels,
+      // The vertebra the run judged leakage by (--labels or the bone rule: best/anatomy_labels.nrrd), outlined.
+      const auto vertebra = run.anatomyLabelsFile ? imaging::toVtk(run.anatomyLabelsFile.GetPointer()) : nullptr;
+      marks.vertebraMask = vertebra;
+      marks.vertebraLabel = 1; // anatomy::TissueClass::TargetVertebra
+      rendering::writeCementSlices(imaging::toVtk(run.simulatedCtFile.GetPointer()), labels,
                                    {r.targetCentreMm.x(), r.targetCentreMm.y(), r.targetCentreMm.z()}, png,
                                    marks.options());
     });

@@ -60,7 +60,8 @@ void writeCementSurface(vtkImageData* labels, const std::filesystem::path& png, 
   if (labels == nullptr || labels->GetPointData()->GetScalars() == nullptr ||
       labels->GetNumberOfScalarComponents() != 1)
     throw std::invalid_argument("writeCementSurface: the label map must be a one-component image");
-  const double inBone[3] = {0.30, 0.50, 0.95}, leaked[3] = {0.90, 0.08, 0.08}, grey[3] = {0.15, 0.15, 0.15};
+  const double inBone[3] = {0.30, 0.50, 0.95}, leaked[3] = {0.90, 0.08, 0.08}, grey[3] = {0.15, 0.15, 0.15},
+               bone[3] = {0.80, 0.72, 0.55};
   vtkIdType inBoneVoxels = 0, leakedVoxels = 0;
   const auto boneMask = maskOf(labels, 1, inBoneVoxels);
   const auto leakMask = maskOf(labels, 2, leakedVoxels);
@@ -95,6 +96,34 @@ void writeCementSurface(vtkImageData* labels, const std::filesystem::path& png, 
   }
   if (!(box[0] <= box[1]))
     throw std::invalid_argument("writeCementSurface: the cement has no surface inside the image");
+  // The vertebra, translucent, drawn after the cement so the cement shows through it.
+  bool vertebraShown = false;
+  if (options.vertebraMask) {
+    if (!options.vertebraMask->GetPointData()->GetScalars())
+      throw std::invalid_argument("writeCementSurface: the vertebra label map has no scalars");
+    vtkIdType vertebraVoxels = 0;
+    const auto vertebra = maskOf(options.vertebraMask, options.vertebraLabel, vertebraVoxels);
+    const auto surface = vertebraVoxels > 0 ? surfacemetrics::isosurface(vertebra, iso) : nullptr;
+    if (surface && surface->GetNumberOfPoints() > 0) {
+      double b[6];
+      surface->GetBounds(b);
+      for (int i = 0; i < 3; ++i) {
+        box[2 * i] = std::min(box[2 * i], b[2 * i]);
+        box[2 * i + 1] = std::max(box[2 * i + 1], b[2 * i + 1]);
+      }
+      auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+      mapper->SetInputData(surface);
+      mapper->ScalarVisibilityOff();
+      auto actor = vtkSmartPointer<vtkActor>::New();
+      actor->SetMapper(mapper);
+      actor->GetProperty()->SetColor(bone[0], bone[1], bone[2]);
+      actor->GetProperty()->SetOpacity(options.vertebraOpacity);
+      actor->GetProperty()->SetAmbient(0.35);
+      actor->GetProperty()->SetDiffuse(0.65);
+      scene->AddActor(actor);
+      vertebraShown = true;
+    }
+  }
 
   auto camera = scene->GetActiveCamera();
   const double centre[3] = {(box[0] + box[1]) / 2, (box[2] + box[3]) / 2, (box[4] + box[5]) / 2};
@@ -120,6 +149,7 @@ void writeCementSurface(vtkImageData* labels, const std::filesystem::path& png, 
   if (leakedVoxels > 0) addText(title, "red: leaked (outside bone)", 0.36, 0.12, 18, leaked);
   else addText(title, "no leakage", 0.36, 0.12, 18, grey);
   if (!options.note.empty()) addText(title, options.note, 0.40, 0.55, 16, grey);
+  if (vertebraShown) addText(title, "beige: the vertebra", 0.70, 0.12, 18, bone);
 
   auto window = makeOffScreenRenderWindow(options.widthPx, options.heightPx);
   window->AddRenderer(scene);

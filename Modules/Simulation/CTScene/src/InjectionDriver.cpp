@@ -100,6 +100,28 @@ imaging::MaskType::Pointer labelMapOn(const imaging::ImageType* grid, const std:
   return map;
 }
 
+// The anatomy's classes as a label map on the grid they were made on.
+imaging::MaskType::Pointer anatomyMap(const anatomy::Anatomy& a) {
+  auto map = imaging::MaskType::New();
+  imaging::MaskType::RegionType region;
+  imaging::MaskType::SpacingType spacing;
+  imaging::MaskType::PointType origin;
+  imaging::MaskType::DirectionType direction;
+  for (unsigned r = 0; r < 3; ++r) {
+    region.SetSize(r, itk::SizeValueType(a.grid.size[r]));
+    spacing[r] = a.grid.spacingMm[r];
+    origin[r] = a.grid.originMm[r];
+    for (unsigned c = 0; c < 3; ++c) direction(r, c) = a.grid.direction[3 * r + c];
+  }
+  map->SetRegions(region);
+  map->SetSpacing(spacing);
+  map->SetOrigin(origin);
+  map->SetDirection(direction);
+  map->Allocate();
+  std::copy(a.classes.begin(), a.classes.end(), map->GetBufferPointer());
+  return map;
+}
+
 // The label map on the input CT's grid: each input voxel whose centre lies in the region's box takes the label
 // of the region voxel nearest that centre (labels are not interpolated); 0 elsewhere. Every index is checked.
 imaging::MaskType::Pointer labelsOnInputGrid(const imaging::ImageType* input, const imaging::MaskType* region) {
@@ -332,6 +354,9 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
       result.simulatedCtFile = pasteOntoInputGrid(input, result.simulatedCt, result.regionCt);
       if (result.cementLabels) result.cementLabelsFile = labelsOnInputGrid(input, result.cementLabels);
     }
+    // The anatomy the leakage was judged by, on the same grid as the simulated CT's file.
+    if (const anatomy::Anatomy* used = model->anatomyUsed())
+      result.anatomyLabelsFile = labelsOnInputGrid(result.simulatedCtFile, anatomyMap(*used));
   }
   result.metrics = s.toJson();
   result.metrics["provenance"] = provenance::toJson();
@@ -347,11 +372,14 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   result.metrics["simulated_ct_grid"] = o.cropToRegion ? "region" : "input";
   if (result.cementLabelsFile)
     imaging::writeMask(result.cementLabelsFile, (std::filesystem::path(o.outDir) / "cement_labels.nrrd").string());
-  // For 3D Slicer (SlicerFiles.h): the tip and trajectory, the leak sites, the label map's colours.
-  const std::vector<std::pair<std::string, std::string>> slicerFiles{
+  if (result.anatomyLabelsFile)
+    imaging::writeMask(result.anatomyLabelsFile, (std::filesystem::path(o.outDir) / "anatomy_labels.nrrd").string());
+  // For 3D Slicer (SlicerFiles.h): the tip and trajectory, the leak sites, the label maps' colours.
+  std::vector<std::pair<std::string, std::string>> slicerFiles{
       {"injection.mrk.json", injectionMarkups(*scene.tipMm, scene.direction, scene.cannulaLengthMm).dump(2) + "\n"},
       {"leak_sites.mrk.json", leakSiteMarkups(s.leakageSites).dump(2) + "\n"},
       {"cement_labels.ctbl", cementLabelColourTable()}};
+  if (result.anatomyLabelsFile) slicerFiles.emplace_back("anatomy_labels.ctbl", anatomyLabelColourTable());
   writer.finish(model->time(), result.particles, result.simulatedCt, result.simulatedCtFile, result.tipSeries,
                 model->pressureBaselinePa(), result.metrics, slicerFiles);
   return result;

@@ -55,4 +55,15 @@ std::string cementLabelColourTable() {
          "2 leaked_cement 230 25 25 255\n";
 }
 
+std::string anatomyLabelColourTable() {
+  return "# Colour table of anatomy_labels.nrrd (3D Slicer): index name R G B A (anatomy::TissueClass codes)\n"
+         "0 other_soft_tissue 0 0 0 0\n"
+         "1 target_vertebra 0 200 80 255\n"
+         "2 disc 220 0 220 255\n"
+         "3 canal 255 140 0 255\n"
+         "4 vessel 140 70 255 255\n"
+         "5 other_bone 150 90 30 255\n"
+         "6 air 0 0 0 0\n";
+}
+
 } // namespace cementsph::scene

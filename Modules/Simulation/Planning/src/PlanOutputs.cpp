@@ -50,8 +50,10 @@ scene::InjectionRunResult runBestPlan(const imaging::ImageType* ct, const PlanRe
 
 vtkSmartPointer<vtkImageData> labelsWithUncoveredTarget(const scene::InjectionRunResult& run,
                                                         const Eigen::Vector3d& targetCentreMm, double targetRadiusMm) {
-  if (!run.cementLabels) throw std::runtime_error("the injection made no cement label map");
-  auto labels = imaging::toVtk(run.cementLabels.GetPointer()); // the region's grid, as run.simulatedCt
+  // The files' grid (the input CT's, as simulatedCtFile and anatomyLabelsFile) when the run wrote them.
+  const imaging::MaskType* cement = run.cementLabelsFile ? run.cementLabelsFile.GetPointer() : run.cementLabels.GetPointer();
+  if (!cement) throw std::runtime_error("the injection made no cement label map");
+  auto labels = imaging::toVtk(cement);
   int dims[3];
   labels->GetDimensions(dims);
   for (int k = 0; k < dims[2]; ++k)

@@ -16,6 +16,7 @@
 // then model.finish(stopped) and model.report(result).
 #pragma once
 
+#include "cementsph/anatomy/VertebraAnatomy.h"
 #include "cementsph/imaging/ImageTypes.h"
 #include "cementsph/scene/ModelSelection.h"
 #include "cementsph/scene/PorousSolid.h"
@@ -110,6 +111,9 @@ struct InjectionResult {
   // direction; the input's HU outside the region), or the region's grid with InjectionRunOptions::cropToRegion.
   imaging::ImageType::Pointer simulatedCtFile;
   imaging::MaskType::Pointer cementLabelsFile;
+  // The anatomy the run judged leakage by (InjectionModel::anatomyUsed: anatomy::TissueClass codes, 0 soft tissue,
+  // 1 the target vertebra, ...) on the files' grid (anatomy_labels.nrrd); null when none, or no files are written.
+  imaging::MaskType::Pointer anatomyLabelsFile;
   vtkSmartPointer<vtkPolyData> particles;      // the cement at the end (mm, the CT's frame, point arrays)
   std::vector<TipRecord> tipSeries;
 };
@@ -160,6 +164,10 @@ public:
   // voxel's pores), 2 leaked (any cement outside bone); empty when the engine makes none. The driver writes it
   // as cement_labels.nrrd on the same grid as simulated_ct.nrrd.
   virtual std::vector<std::uint8_t> cementLabels() const { return {}; }
+  // The tissue classes the engine judged leakage by (VertebraAnatomy.h: from the label map or the CT bone rule),
+  // on the grid the classes were made on (the axis-aligned CT's, about the tip); null when it used none (the HU
+  // rule, or an engine without anatomy). The driver writes it as anatomy_labels.nrrd.
+  virtual const anatomy::Anatomy* anatomyUsed() const { return nullptr; }
   // The pressure column tip_pressure.csv subtracts (none: the model's pressure has no baseline yet).
   virtual std::optional<double> pressureBaselinePa() const { return 0.0; }
 };

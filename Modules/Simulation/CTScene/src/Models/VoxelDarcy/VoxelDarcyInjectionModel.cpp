@@ -490,6 +490,8 @@ public:
   }
 
   // 1 where cement fills at least half a voxel's pores in bone, 2 where any cement is outside bone.
+  const anatomy::Anatomy* anatomyUsed() const override { return usedAnatomy_ ? &*usedAnatomy_ : nullptr; }
+
   std::vector<std::uint8_t> cementLabels() const override {
     const VoxelMedium& m = filling_->medium();
     std::vector<std::uint8_t> l(m.count(), 0);
@@ -709,6 +711,7 @@ private:
       }
     }
     anatomy_ = std::move(roi);
+    usedAnatomy_ = std::move(cube); // the whole cube, for anatomy_labels.nrrd
   }
 
   // The cannula's shaft behind the outlet is closed (cement cannot flow back into or along it): voxels more
@@ -766,6 +769,7 @@ private:
   std::vector<std::uint8_t> leak_; // continuum: voxels outside the target bone, where cement is leakage
   std::vector<float> unitEntry_;   // continuum: each voxel's entry pressure at sigma cos(theta) = 1 N/m [Pa]
   std::optional<anatomy::Anatomy> anatomy_; // continuum: the tissue classes on the region's grid
+  std::optional<anatomy::Anatomy> usedAnatomy_; // the same classes on the cube the rule ran on (anatomyUsed)
   std::string leakRule_;
   std::vector<std::string> shaftWarnings_;
   std::size_t shaftVoxels_ = 0;

@@ -29,8 +29,9 @@ scene::SceneConfig bestPlanScene(const PlanResult& plan, const PlanRequest& requ
 scene::InjectionRunResult runBestPlan(const imaging::ImageType* ct, const PlanResult& plan, const PlanRequest& request,
                                       const std::filesystem::path& outDir);
 
-// The run's cement label map (on its region's grid) with the target sphere's voxels that hold no cement as
-// label 3. Throws std::runtime_error when the run made no label map.
+// The run's cement label map (on the files' grid, cementLabelsFile, when it wrote files; else on its region's
+// grid) with the target sphere's voxels that hold no cement as label 3. Throws std::runtime_error when the run
+// made no label map.
 vtkSmartPointer<vtkImageData> labelsWithUncoveredTarget(const scene::InjectionRunResult& run,
                                                         const Eigen::Vector3d& targetCentreMm, double targetRadiusMm);
 
