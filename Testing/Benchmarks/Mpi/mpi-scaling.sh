@@ -15,8 +15,9 @@ out="$(mktemp -d)"
 tip="$(python3 -c "import json;t=json.load(open('Data/foam-phantom/truth.json'))['injection']['tip_mm'];print(','.join(repr(x) for x in t))")"
 study=(study --ct Data/foam-phantom/pre.nrrd --scene Data/scenes/paper-1ml.json --tip-mm "$tip"
        --viscosities-pa-s 50,100,200,400 --no-pictures)
-plan=(plan --ct Data/vertebra-phantom/pre.nrrd --scene Data/scenes/paper.json --entry-mm 41,49.08,22.5
-      --direction -0.3,-0.954,0 --min-depth-mm 10 --max-depth-mm 30 --target-mm 32,21,22.5 --target-radius-mm 6
+# A transpedicular entry clear of the canal (plan refuses a shaft through it: PlanTrajectory.h).
+plan=(plan --ct Data/vertebra-phantom/pre.nrrd --scene Data/scenes/paper.json --entry-mm 48.5,52.4,22.5
+      --min-depth-mm 10 --max-depth-mm 36 --target-mm 32,21,22.5 --target-radius-mm 6
       --min-volume-ml 1 --max-volume-ml 4 --max-syringe-mpa 3 --max-leakage-ml 0 --quiet)
 # --bind-to none: Open MPI binds each rank to one core when it starts two ranks or fewer, so a rank's OpenMP
 # threads would share that one core (measured: 2 ranks x 2 threads 85 s against 51 s in one process).
