@@ -252,7 +252,11 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   setup.solid = &solid;
   const double roiVoxels = double(solid.roiSize[0]) * double(solid.roiSize[1]) * double(solid.roiSize[2]);
   const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
-  ModelChoice choice = chooseModel(scene, setup.model.restDensity, setup.model.soundSpeed, roiPorosity);
+  // The pore scale for the choice between particles and voxels (ModelSelection.h): pore-resolved bone only.
+  const PoreScale pores = poreScaleOf(solid.solid, solid.grid.size,
+                                      {solid.grid.spacing[0], solid.grid.spacing[1], solid.grid.spacing[2]},
+                                      !setup.continuum);
+  ModelChoice choice = chooseModel(scene, setup.model.restDensity, setup.model.soundSpeed, roiPorosity, pores);
   const InjectionModelRegistry::Entry& entry = InjectionModelRegistry::instance().at(choice.pressureModel);
   choice.model = entry.description;
   setup.choice = &choice;

@@ -335,3 +335,38 @@ TEST(ParticleDarcy, ACuringCementIsRefusedWithOneLine) {
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
 }
+
+// pressure_model "auto" through the driver (ModelSelection.h): a scaffold whose pores are wide (rods 3 voxels
+// thick every 20 voxels of 0.5 mm: mean pore chord 15.24 mm, 30 voxels, counted here over the 40^3 region from
+// the rod rule) with particles of d = 0.6 mm (25 across) runs particle-darcy; the default scaffold (every 10
+// voxels: 7.23 mm) with the preset's d = 1.14 mm (6.3 across, under 8) runs voxel-darcy.
+TEST(ParticleDarcy, AutoPicksParticlesWhereTheyResolveThePores) {
+  auto chord = [](int period) { // pore length / pore runs along x, y and z
+    double length = 0, runs = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int u = 0; u < 40; ++u)
+        for (int v = 0; v < 40; ++v) {
+          bool inPore = false;
+          for (int t = 0; t < 40; ++t) {
+            int c[3];
+            c[axis] = t, c[(axis + 1) % 3] = u, c[(axis + 2) % 3] = v;
+            const bool pore = !cementsph::scene::testing::scaffoldRod(c[0], c[1], c[2], period, 3);
+            if (pore && !inPore) runs += 1;
+            if (pore) length += 0.5;
+            inPore = pore;
+          }
+        }
+    return length / runs;
+  };
+  const nlohmann::json j{{"tip_mm", {13, 13, 13}}, {"volume_ml", 0.005}, {"flow_rate_ml_per_s", 0.05},
+                         {"cannula_length_mm", 5}, {"snapshot_interval_s", 1.0}};
+  nlohmann::json fine = j;
+  fine["particle_radius_mm"] = 0.3;
+  const InjectionRunResult wide = runInjection(cementsph::scene::testing::scaffold(40, 0.5, 20, 3), sceneFromJson(fine), {});
+  EXPECT_EQ(wide.metrics["pressure_model"], "particle-darcy") << wide.metrics["model_reason"];
+  EXPECT_NEAR(wide.metrics["dimensionless_numbers"]["mean_pore_chord_mm"].get<double>(), chord(20), 1e-9);
+  EXPECT_GE(chord(20) / 0.6, 8.0);
+  const InjectionRunResult narrow = runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(j), {});
+  EXPECT_EQ(narrow.metrics["pressure_model"], "voxel-darcy") << narrow.metrics["model_reason"];
+  EXPECT_LT(chord(10) / 1.14, 8.0);
+}

@@ -1,5 +1,6 @@
 #include "cementsph/scene/ModelSelection.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -26,10 +27,41 @@ nlohmann::json ModelChoice::numbersJson() const {
           {"permeability_estimate_m2", n.permeabilityM2},
           {"porosity", n.porosity},
           {"capillary_pressure_estimate_pa", n.capillaryPressurePa},
-          {"front_pore_pressure_drop_pa", n.frontPorePressurePa}};
+          {"front_pore_pressure_drop_pa", n.frontPorePressurePa},
+          {"mean_pore_chord_mm", n.meanPoreChordM * 1e3},
+          {"particles_across_pore", n.particlesAcrossPore}};
 }
 
-ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed, double porosity) {
+PoreScale poreScaleOf(const std::vector<std::uint8_t>& solid, const std::array<int, 3>& size,
+                      const std::array<double, 3>& spacingM, bool poreResolved) {
+  PoreScale s;
+  s.poreResolved = poreResolved;
+  s.voxelSizeM = std::max({spacingM[0], spacingM[1], spacingM[2]});
+  const std::size_t nx = std::size_t(size[0]), ny = std::size_t(size[1]), nz = std::size_t(size[2]);
+  if (solid.size() != nx * ny * nz || solid.empty()) return s;
+  const std::size_t stride[3] = {1, nx, nx * ny};
+  double length = 0, runs = 0;
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    for (int v = 0; v < size[std::size_t(c)]; ++v)
+      for (int u = 0; u < size[std::size_t(b)]; ++u) {
+        bool inPore = false;
+        for (int t = 0; t < size[std::size_t(a)]; ++t) {
+          const std::size_t index = std::size_t(t) * stride[a] + std::size_t(u) * stride[b] + std::size_t(v) * stride[c];
+          const bool pore = !solid[index];
+          if (pore) {
+            length += spacingM[std::size_t(a)];
+            if (!inPore) runs += 1;
+          }
+          inPore = pore;
+        }
+      }
+  }
+  s.meanPoreChordM = runs > 0 ? length / runs : 0.0;
+  return s;
+}
+
+ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed, double porosity, const PoreScale& pores) {
   ModelChoice c;
   DimensionlessNumbers& n = c.numbers;
   const double d = scene.spacingM(), mu = scene.viscositySchedule().at(0.0);
@@ -49,6 +81,10 @@ ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed
   n.capillaryPressurePa = 2.0 * kCementMarrowTensionNPerM / (0.5 * d);
   n.capillaryOverViscous = n.capillaryPressurePa / n.frontPorePressurePa;
   n.viscosityRatio = mu / kMarrowViscosityPaS;
+  n.meanPoreChordM = pores.meanPoreChordM;
+  n.particlesAcrossPore = d > 0 ? pores.meanPoreChordM / d : 0.0;
+  const bool ctResolvesPores = pores.voxelSizeM > 0 && pores.meanPoreChordM >= kResolvedPoreVoxels * pores.voxelSizeM;
+  const bool particlesResolvePores = n.particlesAcrossPore >= kParticlesAcrossPore;
 
   std::string caveats;
   if (n.viscosityRatio < 100) caveats += "; the marrow is only " + g3(n.viscosityRatio) + "x less viscous: a single-phase model overestimates the spreading";
@@ -63,9 +99,24 @@ ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed
   } else if (n.reynolds >= 0.1 || n.stokes >= 0.1) {
     c.pressureModel = "equation-of-state";
     c.reason = "inertia is not negligible (" + numbers + "): the creeping-flow models do not apply; use the paper preset's central-difference integrator";
+  } else if (n.compression > 0.01 && pores.poreResolved && ctResolvesPores && particlesResolvePores) {
+    c.pressureModel = "particle-darcy";
+    c.reason = "creeping flow (" + numbers + ") in resolved pore space: the mean pore chord " +
+               g3(pores.meanPoreChordM * 1e3) + " mm is " + g3(pores.meanPoreChordM / pores.voxelSizeM) +
+               " voxels and " + g3(n.particlesAcrossPore) + " particle spacings (at least " + g3(kResolvedPoreVoxels) +
+               " and " + g3(kParticlesAcrossPore) +
+               "), so the cement is carried as incompressible particles in the pores with a free front (Darcy pressure "
+               "solved on the particles, gauge Pa)";
   } else if (n.compression > 0.01) {
     c.pressureModel = "voxel-darcy";
     c.reason = "creeping flow (" + numbers + "): the equation of state would compress the cement at the Darcy pressure, so the cement is incompressible and its pressure is solved by Darcy's law on the CT's voxels (pressure in gauge Pa)";
+    if (pores.poreResolved && pores.meanPoreChordM > 0)
+      c.reason += !ctResolvesPores ? "; the CT does not resolve the pores (mean pore chord " +
+                                         g3(pores.meanPoreChordM / pores.voxelSizeM) + " voxels, under " +
+                                         g3(kResolvedPoreVoxels) + ")"
+                                   : "; particles (particle-darcy) need " + g3(kParticlesAcrossPore) +
+                                         " spacings across the mean pore chord " + g3(pores.meanPoreChordM * 1e3) +
+                                         " mm, this particle spacing gives " + g3(n.particlesAcrossPore);
   } else {
     c.pressureModel = "equation-of-state";
     c.reason = "creeping flow with compression below 1 % (" + numbers + "): the paper's weakly compressible model is accurate";
@@ -73,6 +124,7 @@ ModelChoice chooseModel(const SceneConfig& scene, double rho0, double soundSpeed
   c.reason += caveats;
   if (c.recommended.empty()) c.recommended = c.pressureModel;
   c.model = c.pressureModel == "voxel-darcy"      ? "incompressible-darcy-on-voxels"
+            : c.pressureModel == "particle-darcy" ? "incompressible-darcy-on-particles-isph"
             : c.pressureModel == "incompressible" ? "incompressible-darcy-on-particles"
                                                   : "weakly-compressible";
   return c;
