@@ -610,8 +610,9 @@ private:
             if (inside && !closed_[v] && occupied_[v]) continue; // cement: the particles' own sums
             const Eigen::Vector3d c = g.origin + g.spacing.cwiseProduct(Eigen::Vector3d(ii, j, k));
             const Eigen::Vector3d r = c - p;
-            const double rn = r.norm();
-            if (rn >= cs || rn == 0) continue;
+            const double r2 = r.squaredNorm();
+            if (r2 >= cs * cs || r2 == 0) continue; // outside the support: no square root (most of the box)
+            const double rn = std::sqrt(r2);
             const double f = kernel_.fOverR(rn);
             if (!inside || closed_[v]) {
               closedGradC_[i] += vc * f * r; // grad_i W toward the closed voxel: counted as occupied
