@@ -23,6 +23,7 @@
 #include "vtkSPHInjectionFilter.h"
 
 #include <nlohmann/json.hpp>
+#include <vtkImageData.h>
 #include <vtkSmartPointer.h>
 
 #include <omp.h>
@@ -77,6 +78,13 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+// What a run gives the pictures: its metrics, and its simulated CT and cement label map on the input CT's grid
+// (the filter's output ports 0 and 1; the same voxels as simulated_ct.nrrd and cement_labels.nrrd).
+struct InjectRun {
+  json metrics;
+  vtkSmartPointer<vtkImageData> simulatedCt, cementLabels;
+};
+
 // The largest leakage site of the run's metrics (leakage_sites: volume_ml, position_mm), if any leaked.
 std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
   std::optional<std::array<double, 3>> at;
@@ -93,9 +101,8 @@ std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
 
 // cement_slices.png: through the largest leak if there is one, else through the tip; the cannula, each leak in its
 // site class's colour (the nearest site of metrics.json) and, with a label map, the target vertebra's outline.
-void drawCementSlices(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
-  const auto sim = imaging::readVolume((out / "simulated_ct.nrrd").string());
-  const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
+void drawCementSlices(const InjectRun& run, const scene::SceneConfig& scene, const fs::path& png) {
+  const json& m = run.metrics;
   rendering::InjectionMarks marks; // the same marks as plan's best/cement_slices.png
   marks.tipMm = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
   marks.direction = {scene.direction.x(), scene.direction.y(), scene.direction.z()};
@@ -108,14 +115,13 @@ void drawCementSlices(const fs::path& out, const scene::SceneConfig& scene, cons
   const auto anatomyVtk = anatomy ? imaging::toVtk(anatomy.GetPointer()) : nullptr;
   marks.vertebraMask = anatomyVtk;
   if (scene.labelTable.is_object()) marks.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
-  rendering::writeCementSlices(imaging::toVtk(sim.GetPointer()), imaging::toVtk(labels.GetPointer()), marks.centreMm(),
-                               png, marks.options());
+  rendering::writeCementSlices(run.simulatedCt, run.cementLabels, marks.centreMm(), png, marks.options());
 }
 
 // cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the
 // largest leak (from the tip towards it, a little from above), so the cement in bone does not hide it.
-void drawCementSurface(const fs::path& out, const scene::SceneConfig& scene, const json& m, const fs::path& png) {
-  const auto labels = imaging::readVolume((out / "cement_labels.nrrd").string());
+void drawCementSurface(const InjectRun& run, const scene::SceneConfig& scene, const fs::path& png) {
+  const json& m = run.metrics;
   rendering::CementSurfaceOptions options;
   if (const auto leak = largestLeakMm(m)) {
     double d[3], norm = 0;
@@ -133,7 +139,7 @@ void drawCementSurface(const fs::path& out, const scene::SceneConfig& scene, con
              << m["leakage_sites"].size() << (m["leakage_sites"].size() == 1 ? " site" : " sites");
     options.note = leakNote.str();
   }
-  rendering::writeCementSurface(imaging::toVtk(labels.GetPointer()), png, options);
+  rendering::writeCementSurface(run.cementLabels, png, options);
 }
 
 void printSummary(const json& m, const std::string& out) {
@@ -146,8 +152,8 @@ void printSummary(const json& m, const std::string& out) {
 }
 
 // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files; returns
-// its metrics.
-json runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
+// its metrics and its outputs in memory, which the pictures draw (rather than reading back the files).
+InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
   const auto image = imaging::readVolume(a.ct);
   const auto spacing = image->GetSpacing();
   const std::string note =
@@ -160,7 +166,11 @@ json runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
   filter->SetPrintProgress(!a.quiet);
   filter->Update();
   filter->RethrowIfFailed();
-  return json::parse(filter->GetMetricsJSON());
+  InjectRun run;
+  run.metrics = json::parse(filter->GetMetricsJSON());
+  run.simulatedCt = filter->GetSimulatedCTOutput();
+  run.cementLabels = filter->GetLabelMapOutput();
+  return run;
 }
 
 } // namespace
@@ -172,7 +182,8 @@ int runInject(const InjectRequest& a, json* metrics) {
     scene.explicitKeys.insert("labels_path"); // set by the user, so an engine that ignores it says so
   }
   if (a.threads > 0) omp_set_num_threads(a.threads);
-  const json m = runFilter(a, scene);
+  const InjectRun run = runFilter(a, scene);
+  const json& m = run.metrics;
   if (metrics) *metrics = m;
   printSummary(m, a.out);
   if (a.noPictures) return 0;
@@ -186,9 +197,10 @@ int runInject(const InjectRequest& a, json* metrics) {
     });
   };
   step("tip_pressure.png", [&](const fs::path& png) { rendering::writeTipPressurePlot(out / "tip_pressure.csv", png); });
+  // Only an engine that labels its cement (the driver then wrote cement_labels.nrrd) gets the label pictures.
   if (fs::exists(out / "cement_labels.nrrd")) {
-    step("cement_slices.png", [&](const fs::path& png) { drawCementSlices(out, scene, m, png); });
-    step("cement_surface.png", [&](const fs::path& png) { drawCementSurface(out, scene, m, png); });
+    step("cement_slices.png", [&](const fs::path& png) { drawCementSlices(run, scene, png); });
+    step("cement_surface.png", [&](const fs::path& png) { drawCementSurface(run, scene, png); });
   }
   step("injection_pressure.png",
        [&](const fs::path& png) { rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", png); });
