@@ -88,6 +88,10 @@ double evaluate(unsigned, const double* x, double*, void* data) {
       s.secondTipWithdrawalMm = e.depthMm - e.secondDepthMm;
       s.secondTipVolumeMl = e.secondVolumeMl;
     }
+    // The driver itself, not vtkSPHInjectionFilter (which runBestPlan and inject use): the filter's outputs are
+    // the simulated CT and label map pasted onto the whole input grid, a pass over every voxel of the scan per
+    // injection (tens of millions on a clinical CT) that an evaluation, which reads only the summary and the
+    // cement points, would pay for nothing. The same runInjection either way, so the same figures.
     const scene::InjectionRunResult run = scene::runInjection(c->ct, s, {});
     e.coverage = targetCoverage(run.particles, r.targetCentreMm, r.targetRadiusMm);
     e.syringeMpa = run.summary.maxInjectionPressurePa * 1e-6;

@@ -3,9 +3,15 @@
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/provenance/Provenance.h"
+#include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/sph/Simulation.h"
+#include "vtkSPHInjectionFilter.h"
+
+#include <vtkPolyData.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <stdexcept>
 
 namespace cementsph::planning {
@@ -41,11 +47,40 @@ scene::SceneConfig bestPlanScene(const PlanResult& plan, const PlanRequest& requ
   return s;
 }
 
+namespace {
+// A label map (any scalar type, values 0..255) as a MaskType, its geometry kept.
+imaging::MaskType::Pointer labelsAsMask(const imaging::ImageType* image) {
+  auto mask = imaging::MaskType::New();
+  mask->CopyInformation(image);
+  mask->SetRegions(image->GetLargestPossibleRegion());
+  mask->Allocate();
+  const float* in = image->GetBufferPointer();
+  std::uint8_t* out = mask->GetBufferPointer();
+  for (std::size_t i = 0, n = image->GetLargestPossibleRegion().GetNumberOfPixels(); i < n; ++i)
+    out[i] = std::uint8_t(std::lround(in[i]));
+  return mask;
+}
+} // namespace
+
 scene::InjectionRunResult runBestPlan(const imaging::ImageType* ct, const PlanResult& plan, const PlanRequest& request,
                                       const std::filesystem::path& outDir) {
-  scene::InjectionRunOptions o;
-  o.outDir = outDir.string();
-  return scene::runInjection(ct, bestPlanScene(plan, request), o);
+  // Through the VTK filter, as inject runs (the same driver, files and outputs on the CT's own grid).
+  auto filter = vtkSmartPointer<vtkSPHInjectionFilter>::New();
+  filter->SetInputDataObject(0, imaging::toVtk(ct));
+  filter->SetScene(bestPlanScene(plan, request));
+  filter->SetOutputDirectory(outDir.string());
+  filter->Update();
+  filter->RethrowIfFailed();
+  scene::InjectionRunResult run;
+  run.summary = *filter->GetSummary();
+  run.metrics = nlohmann::json::parse(filter->GetMetricsJSON());
+  run.particles = vtkSmartPointer<vtkPolyData>::New();
+  run.particles->DeepCopy(filter->GetCementPointsOutput());
+  run.simulatedCtFile = imaging::imageFromVtk(filter->GetSimulatedCTOutput());
+  run.cementLabelsFile = labelsAsMask(imaging::imageFromVtk(filter->GetLabelMapOutput()));
+  if (const auto anatomy = outDir / "anatomy_labels.nrrd"; std::filesystem::exists(anatomy))
+    run.anatomyLabelsFile = labelsAsMask(imaging::readVolume(anatomy.string()));
+  return run;
 }
 
 vtkSmartPointer<vtkImageData> labelsWithUncoveredTarget(const scene::InjectionRunResult& run,

@@ -93,4 +93,45 @@ TEST(PlanLimits, MarrowFatIsNotLeakageForTheLeakLimit) {
   EXPECT_DOUBLE_EQ(run.summary.leakageVolumeMl, 0.0);
 }
 
+// plan's best run goes through vtkSPHInjectionFilter (issue 22 item 1), as inject's does: the same figures and
+// images as the driver run directly (the oracle: runInjection with the same scene, files on the input grid),
+// to the bit, since both are the one driver on the same CT.
+TEST(PlanLimits, TheBestRunThroughTheFilterEqualsTheDriversRun) {
+  const auto ct = imaging::readVolume(
+      (std::filesystem::path(CEMENTSPH_TEST_DATA_DIR) / "vertebra-phantom" / "pre.nrrd").string());
+  planning::PlanRequest r;
+  r.scene = scene::scenePreset("paper");
+  r.entryMm = Eigen::Vector3d(48.5, 52.4, 22.5);
+  r.targetCentreMm = Eigen::Vector3d(32, 21, 22.5);
+  r.direction = r.targetCentreMm - r.entryMm;
+  planning::PlanResult plan;
+  plan.best.depthMm = 30;
+  plan.best.tipMm = r.entryMm + 30 * r.direction.normalized();
+  plan.best.volumeMl = 1;
+  const auto base = std::filesystem::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch";
+  std::filesystem::remove_all(base / "plan-best-filter");
+  std::filesystem::remove_all(base / "plan-best-driver");
+  const auto filtered = planning::runBestPlan(ct, plan, r, base / "plan-best-filter");
+  scene::InjectionRunOptions o;
+  o.outDir = (base / "plan-best-driver").string();
+  const auto direct = scene::runInjection(ct, planning::bestPlanScene(plan, r), o);
+  EXPECT_DOUBLE_EQ(filtered.summary.finalTipPressurePa, direct.summary.finalTipPressurePa);
+  EXPECT_DOUBLE_EQ(filtered.summary.maxInjectionPressurePa, direct.summary.maxInjectionPressurePa);
+  EXPECT_DOUBLE_EQ(filtered.summary.cementVolumeMl, direct.summary.cementVolumeMl);
+  EXPECT_DOUBLE_EQ(filtered.summary.leakageVolumeMl, direct.summary.leakageVolumeMl);
+  EXPECT_EQ(filtered.particles->GetNumberOfPoints(), direct.particles->GetNumberOfPoints());
+  auto sameVoxels = [](const auto* a, const auto* b, const char* what) {
+    ASSERT_TRUE(a && b) << what;
+    ASSERT_EQ(a->GetLargestPossibleRegion(), b->GetLargestPossibleRegion()) << what;
+    const auto n = a->GetLargestPossibleRegion().GetNumberOfPixels();
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < n; ++i) differ += a->GetBufferPointer()[i] != b->GetBufferPointer()[i] ? 1 : 0;
+    EXPECT_EQ(differ, 0u) << what;
+    for (unsigned k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(a->GetOrigin()[k], b->GetOrigin()[k]) << what;
+  };
+  sameVoxels(filtered.simulatedCtFile.GetPointer(), direct.simulatedCtFile.GetPointer(), "simulated CT");
+  sameVoxels(filtered.cementLabelsFile.GetPointer(), direct.cementLabelsFile.GetPointer(), "cement labels");
+  sameVoxels(filtered.anatomyLabelsFile.GetPointer(), direct.anatomyLabelsFile.GetPointer(), "anatomy labels");
+}
+
 } // namespace

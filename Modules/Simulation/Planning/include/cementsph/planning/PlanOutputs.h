@@ -25,7 +25,10 @@ void writePlanTables(const PlanResult& plan, const PlanRequest& request, const s
 // second tip, the withdrawal and the volume given there.
 scene::SceneConfig bestPlanScene(const PlanResult& plan, const PlanRequest& request);
 
-// The best plan's injection, its files written into outDir (the inject runner's).
+// The best plan's injection through vtkSPHInjectionFilter, as inject runs it, its files written into outDir. The
+// result holds the summary, metrics, cement points and the files' images on the CT's own grid (simulatedCtFile,
+// cementLabelsFile from the filter's outputs 0 and 1, anatomyLabelsFile from anatomy_labels.nrrd); not the
+// region's images. The plan's evaluations call the driver directly (InjectionPlanner.cpp says why).
 scene::InjectionRunResult runBestPlan(const imaging::ImageType* ct, const PlanResult& plan, const PlanRequest& request,
                                       const std::filesystem::path& outDir);
 
