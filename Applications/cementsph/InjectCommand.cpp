@@ -83,6 +83,11 @@ using nlohmann::json;
 struct InjectRun {
   json metrics;
   vtkSmartPointer<vtkImageData> simulatedCt, cementLabels;
+  // The vertebra on the same grid: the --labels map (its label label_table's target_vertebra, or -1: the label
+  // at the tip), else the anatomy the run judged leakage by (anatomy_labels.nrrd, the target vertebra 1); null
+  // when the run had none (the HU rule).
+  vtkSmartPointer<vtkImageData> vertebra;
+  int vertebraLabel = -1;
 };
 
 // The largest leakage site of the run's metrics (leakage_sites: volume_ml, position_mm), if any leaked.
@@ -100,7 +105,8 @@ std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
 }
 
 // cement_slices.png: through the largest leak if there is one, else through the tip; the cannula, each leak in its
-// site class's colour (the nearest site of metrics.json) and, with a label map, the target vertebra's outline.
+// site class's colour (the nearest site of metrics.json) and the target vertebra's outline (--labels or the bone
+// rule's anatomy_labels.nrrd).
 void drawCementSlices(const InjectRun& run, const scene::SceneConfig& scene, const fs::path& png) {
   const json& m = run.metrics;
   rendering::InjectionMarks marks; // the same marks as plan's best/cement_slices.png
@@ -109,12 +115,9 @@ void drawCementSlices(const InjectRun& run, const scene::SceneConfig& scene, con
   for (const auto& site : m.value("leakage_sites", json::array()))
     marks.leaks.push_back({{site["position_mm"].get<std::array<double, 3>>(), site["site_class"].get<std::string>()},
                            site["volume_ml"].get<double>()});
-  // The label map is on the input CT's grid, as simulated_ct.nrrd is; the vertebra is its label at the tip, or
-  // label_table's target_vertebra.
-  const auto anatomy = scene.labelsPath.empty() ? nullptr : imaging::readVolume(scene.labelsPath);
-  const auto anatomyVtk = anatomy ? imaging::toVtk(anatomy.GetPointer()) : nullptr;
-  marks.vertebraMask = anatomyVtk;
-  if (scene.labelTable.is_object()) marks.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
+  // The vertebra's outline, with or without --labels.
+  marks.vertebraMask = run.vertebra;
+  marks.vertebraLabel = run.vertebraLabel;
   rendering::writeCementSlices(run.simulatedCt, run.cementLabels, marks.centreMm(), png, marks.options());
 }
 
@@ -138,6 +141,22 @@ void drawCementSurface(const InjectRun& run, const scene::SceneConfig& scene, co
     leakNote << std::setprecision(3) << "leaked " << m["leakage_volume_ml"].get<double>() << " ml at "
              << m["leakage_sites"].size() << (m["leakage_sites"].size() == 1 ? " site" : " sites");
     options.note = leakNote.str();
+  }
+  // The vertebra around the cement, translucent: its label, or (--labels without target_vertebra) the one at the tip.
+  options.vertebraMask = run.vertebra;
+  options.vertebraLabel = run.vertebraLabel;
+  if (run.vertebra && run.vertebraLabel < 0) {
+    double tip[3] = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()}, index[3];
+    run.vertebra->TransformPhysicalPointToContinuousIndex(tip, index);
+    int ijk[3], dims[3];
+    run.vertebra->GetDimensions(dims);
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      ijk[a] = int(std::lround(index[a]));
+      inside = inside && ijk[a] >= 0 && ijk[a] < dims[a];
+    }
+    options.vertebraLabel = inside ? int(std::lround(run.vertebra->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0))) : 0;
+    if (options.vertebraLabel == 0) options.vertebraMask = nullptr; // the tip is in no labelled structure
   }
   rendering::writeCementSurface(run.cementLabels, png, options);
 }
@@ -170,6 +189,13 @@ InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
   run.metrics = json::parse(filter->GetMetricsJSON());
   run.simulatedCt = filter->GetSimulatedCTOutput();
   run.cementLabels = filter->GetLabelMapOutput();
+  if (!scene.labelsPath.empty()) {
+    run.vertebra = imaging::toVtk(imaging::readVolume(scene.labelsPath).GetPointer());
+    if (scene.labelTable.is_object()) run.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
+  } else if (const fs::path anatomy = fs::path(a.out) / "anatomy_labels.nrrd"; fs::exists(anatomy)) {
+    run.vertebra = imaging::toVtk(imaging::readVolume(anatomy.string()).GetPointer()); // the driver wrote it
+    run.vertebraLabel = 1;                                                           // anatomy::TissueClass
+  }
   return run;
 }
 
