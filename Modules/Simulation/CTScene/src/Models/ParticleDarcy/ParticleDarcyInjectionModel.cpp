@@ -30,9 +30,11 @@
 //  * Pressure: -div(M grad p) = s with the symmetric pairwise Laplacian of Brookshaw 1985 (Proc. ASA 6:207)
 //    / Cleary & Monaghan 1999 (J Comput Phys 148:227): A_ii = sum_j w_ij + g_i, A_ij = -w_ij,
 //    w_ij = 2 Omega_i Omega_j M_ij F(r_ij) / r_ij (M_ij the harmonic mean of the mobilities: one M in a
-//    pore-resolved medium), b_i = Q_i + (d^3 - Omega_i) / tau: the density-invariant term of Shao & Lo 2003
-//    (Adv Water Resour 26:787) relaxing each particle's volume to d^3 over tau = 4 steps (without it the
-//    projection's divergence error let the cloud expand to 0.4 of its density). Symmetric positive
+//    pore-resolved medium), b_i = Q_i; and the same matrix with b_i = (d^3 - Omega_i) / tau for the
+//    density-invariant correction pc of Shao & Lo 2003 (Adv Water Resour 26:787), relaxing each particle's
+//    volume to d^3 over tau = 4 steps (without it the projection's divergence error let the cloud expand to
+//    0.4 of its density), solved apart (Hu & Adams 2007: solvePressure) so that the pressure reported is the
+//    Darcy pressure alone while the particles move with p + pc. Symmetric positive
 //    definite: a Jacobi-preconditioned conjugate gradient, matrix-free over the pairs, warm-started,
 //    single-threaded (deterministic; Eigen's OpenMP product was 200x slower on a loaded 2-core machine).
 //  * The free surface needs no tuned threshold: open space is every pore voxel where the cement's share of
