@@ -133,14 +133,9 @@ std::array<double, 3> fitLine(const std::vector<double>& u, const std::vector<do
   return {a, b, worst};
 }
 
-} // namespace
-
-// The oracle of the plot regression tests: a chart maps data to pixels by an affine map per axis, so the markers
-// of known points must sit on one straight line per axis, x to the right and y upwards, within a pixel and a
-// half (the marker's rasterisation). One series: no legend, so every blob of its colour is a point. The y
-// values are a permutation, so a plot that swapped, sorted or dropped points, or drew y downwards, fails.
-TEST(XYPlot, PointsLandWhereTheAxesPutThem) {
-  forgetDisplay();
+// Eight known points, one series (so no legend: every blob of its colour is a marker); the y values are a
+// permutation, so a plot that swapped, sorted or dropped points, or drew y downwards, shows.
+PlotSpec eightPoints() {
   PlotSpec spec;
   spec.title = "points";
   spec.xLabel = "x";
@@ -152,27 +147,65 @@ TEST(XYPlot, PointsLandWhereTheAxesPutThem) {
   points.x = {1, 2, 3, 4, 5, 6, 7, 8};
   points.y = {3, 7, 1, 9, 4, 6, 2, 8};
   spec.series = {points};
-  spec.xMin = 0;
-  spec.xMax = 9;
-  spec.yMin = 0;
-  spec.yMax = 10;
-  const auto png = scratchFolder() / "points.png";
+  return spec;
+}
+
+// The markers' pixel centres fitted against the data, per axis: {offset, pixels per unit, largest residual}.
+std::array<std::array<double, 3>, 2> markerFits(const PlotSpec& spec, const std::filesystem::path& png) {
   writePlotPng(spec, png);
-  auto centres = blobCentres(readPicture(png), {200, 0, 200}, 40);
-  ASSERT_EQ(centres.size(), points.x.size()) << "one marker per point";
+  const auto& rgb = spec.series[0].rgb;
+  auto centres = blobCentres(readPicture(png), {rgb[0], rgb[1], rgb[2]}, 40);
+  EXPECT_EQ(centres.size(), spec.series[0].x.size()) << "one marker per point";
+  if (centres.size() != spec.series[0].x.size()) return {};
   std::sort(centres.begin(), centres.end());
   std::vector<double> px, py;
   for (const auto& c : centres) {
     px.push_back(c[0]);
     py.push_back(c[1]);
   }
-  const auto xFit = fitLine(points.x, px), yFit = fitLine(points.y, py);
+  const auto xFit = fitLine(spec.series[0].x, px), yFit = fitLine(spec.series[0].y, py);
   std::cout << "x: " << xFit[1] << " px per unit, worst " << xFit[2] << " px; y: " << yFit[1] << " px per unit, worst "
             << yFit[2] << " px\n";
-  EXPECT_GT(xFit[1], 20.0); // 9 units across most of 900 px
+  return {xFit, yFit};
+}
+
+} // namespace
+
+// The oracle of the plot regression tests: a chart maps data to pixels by an affine map per axis, so the markers
+// of known points must sit on one straight line per axis, x to the right and y upwards, within a pixel and a
+// half (the marker's rasterisation).
+TEST(XYPlot, PointsLandWhereTheAxesPutThem) {
+  forgetDisplay();
+  PlotSpec spec = eightPoints();
+  spec.xMin = 0;
+  spec.xMax = 9;
+  spec.yMin = 0;
+  spec.yMax = 10;
+  const auto [xFit, yFit] = markerFits(spec, scratchFolder() / "points.png");
+  EXPECT_GT(xFit[1], 20.0);  // 9 units across most of 900 px
   EXPECT_LT(yFit[1], -20.0); // up the picture is down its rows
   EXPECT_LT(xFit[2], 1.5);
   EXPECT_LT(yFit[2], 1.5);
+}
+
+// Axis limits set the scale: the same points with x over [-9, 9] instead of [0, 9] take half the pixels per
+// unit, and with yMax 20 alone (yMin from the data: 1) 10/19 of those over [0, 10]. Within 1 %: the plot
+// area is the same, only the ranges change.
+TEST(XYPlot, AxisLimitsSetTheScaleAndAOneSidedLimitTakesTheOtherFromTheData) {
+  forgetDisplay();
+  const auto dir = scratchFolder();
+  PlotSpec spec = eightPoints();
+  spec.xMin = 0;
+  spec.xMax = 9;
+  spec.yMin = 0;
+  spec.yMax = 10;
+  const auto [xFit, yFit] = markerFits(spec, dir / "narrow.png");
+  spec.xMin = -9;
+  spec.yMin.reset();
+  spec.yMax = 20;
+  const auto [xWide, yWide] = markerFits(spec, dir / "wide.png");
+  EXPECT_NEAR(xWide[1] / xFit[1], 9.0 / 18.0, 0.01 * 9.0 / 18.0);
+  EXPECT_NEAR(yWide[1] / yFit[1], 10.0 / 19.0, 0.01 * 10.0 / 19.0);
 }
 
 // Regression: the plot against Testing/Data/Baselines/xyplot_basic.png (regenerate: that folder's README.md).
