@@ -6,6 +6,7 @@
 // height): every voxel whose whole box lies inside the body is the target vertebra (class 1), and the voxels of
 // class 1 lie in the body or the arch grown by one voxel (partial volume, the rule's rim).
 #include "ProgramRun.h"
+#include "RenderingTestSupport.h"
 #include "cementsph/imaging/VolumeIO.h"
 
 #include <gtest/gtest.h>
@@ -85,6 +86,32 @@ TEST(AnatomyLabels, InjectWritesTheBoneRulesAnatomyOnTheInputGrid) {
             << " target voxels lie in the body or arch grown by a voxel (" << inShape << ")\n";
   EXPECT_GE(bodyFound, 0.99);
   EXPECT_GE(inShape, 0.98);
+}
+
+// The pictures draw that vertebra without --labels: cement_slices.png outlines it (CementSlices.h's outline
+// colour, (0, 200, 80)) on every panel, and cement_surface.png draws it translucent around the cement, so its
+// beige (an unlit (204, 184, 140) blended over white: red above blue, neither grey nor the cement's blue) covers a
+// large share of the picture. Oracle for the share: the body's projection is at least a 40 x 25 mm rectangle
+// (its section), which at any view takes more than 2 % of the 800 x 634 px area at the picture's scale (the
+// framing box's diagonal, 0.55 x of which is half the height, is under 120 mm for the 64 x 70 x 45 mm field).
+TEST(AnatomyLabels, InjectsPicturesShowTheVertebraWithoutLabels) {
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "anatomy-pictures";
+  fs::remove_all(out);
+  const auto r = cementsph::testing::runProgram(
+      CEMENTSPH_EXECUTABLE,
+      {"inject", "--ct", kPhantom.string(), "--scene", (fs::path(CEMENTSPH_TEST_DATA_DIR) / "scenes" / "paper-1ml.json").string(),
+       "--tip-mm", "35,30,22.5", "--set", "direction=[-0.3,-0.954,0]", "--volume-ml", "0.5", "--quiet", "--out",
+       out.string()});
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::size_t outline = 0;
+  for (const auto& rgb : cementsph::rendering::test::readPicture(out / "cement_slices.png").pixels)
+    outline += rgb == cementsph::rendering::test::Picture::Rgb{0, 200, 80} ? 1 : 0;
+  EXPECT_GE(outline, 300u) << "no vertebra outline";
+  const auto surface = cementsph::rendering::test::readPicture(out / "cement_surface.png");
+  std::size_t beige = 0;
+  for (const auto& c : surface.pixels)
+    beige += c[0] > c[2] + 10 && c[1] > c[2] && c[0] < 250 && std::abs(c[0] - c[1]) < 40 ? 1 : 0;
+  EXPECT_GT(double(beige) / double(surface.pixels.size()), 0.02) << beige << " beige pixels";
 }
 
 } // namespace
