@@ -14,7 +14,8 @@
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
 #   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
 #                  whole-scan region against the 40 mm one), threads, snapshots (5 ml with its 100 snapshots
-#                  against one), sph, peers (DRR, registration);
+#                  against one), particles (particle-darcy against voxel-darcy, 1 ml), sph, peers (DRR,
+#                  registration);
 #                  default all. The tables then hold only those sections' figures
 #
 # Writes OUT_DIR/benchmarks.md (the dated tables, machine and load average) and OUT_DIR/runs.jsonl (every
@@ -134,7 +135,7 @@ def ratio(a, b, f="%.2f"):
 
 
 ONLY = [x.strip() for x in os.environ.get("ONLY", "").split(",") if x.strip()]
-SECTIONS = ("voxel", "region", "threads", "snapshots", "sph", "peers")
+SECTIONS = ("voxel", "region", "threads", "snapshots", "particles", "sph", "peers")
 for x in ONLY:
     if x not in SECTIONS:
         sys.exit("run-all.sh: ONLY=%s: unknown section %r; use a comma list of %s" % (os.environ["ONLY"], x, ", ".join(SECTIONS)))
@@ -267,8 +268,34 @@ if want("snapshots"):
                             "cementsph inject ... --volume-ml 5 [--snapshot-interval-s 1e6]"))
     details.append("### Snapshots, 5 ml on the bundled phantom, 1 thread (medians of %d interleaved pairs; particles_NNNN.vtp are written on a second thread)\n\n%s\n" % (REPEATS, "\n".join(rows)))
 
+if want("particles") and not QUICK:
+    # 5. The incompressible SPH engine (particle-darcy) against the voxel engine on the same 1 ml phantom scene,
+    # 1 thread, interleaved (issue 19's speed target: within 3 x the voxel model's CPU).
+    rows = ["| engine | wall (s) | CPU (s) | steps | pressure solves | CG iterations per solve | solve (s) | tip pressure (Pa) |", "|---|---|---|---|---|---|---|---|"]
+    res = {"voxel-darcy": [], "particle-darcy": []}
+    for rep in range(REPEATS):
+        order = ["voxel-darcy", "particle-darcy"]
+        if rep % 2:
+            order.reverse()
+        for engine in order:
+            r = inject(CURRENT, "engine-%s-%d" % (engine, rep), 1, extra=["--set", "pressure_model=%s" % engine])
+            if r["rc"] == 0:
+                with open(os.path.join(OUT, "runs", "engine-%s-%d" % (engine, rep), "metrics.json")) as f:
+                    m = json.load(f)
+                r["step_count"] = m.get("steps", m.get("pressure_solves"))
+            res[engine].append(r)
+    for engine in ("voxel-darcy", "particle-darcy"):
+        rs = res[engine]
+        rows.append("| %s | %s | %s | %s | %s | %s | %s | %s |" % (engine, fmt(med(rs, "wall")), fmt(med(rs, "cpu")), fmt(med(rs, "step_count"), "%.0f"),
+                    fmt(med(rs, "steps"), "%.0f"), fmt(med(rs, "iterations"), "%.1f"), fmt(med(rs, "solve_s")), fmt(med(rs, "tip_pa"), "%.1f")))
+    v, p = res["voxel-darcy"], res["particle-darcy"]
+    summary.append(("particle-darcy / voxel-darcy, 1 ml phantom, 1 thread", "%s s / %s s CPU" % (fmt(med(p, "cpu")), fmt(med(v, "cpu"))),
+                    "%s x the voxel engine's CPU (target <= 3 x; load %.1f)" % (ratio(med(p, "cpu"), med(v, "cpu")), loads[-1]),
+                    "cementsph inject ... --volume-ml 1 --set pressure_model=particle-darcy"))
+    details.append("### particle-darcy against voxel-darcy, 1 ml on the bundled phantom, 1 thread (medians of %d interleaved pairs)\n\n%s\n" % (REPEATS, "\n".join(rows)))
+
 if want("sph"):
-    # 5. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
+    # 6. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
     sph = exe(BUILD, "SPHStepBenchmark")
     if sph:
         filt = "BM_PeriodicBox200k/(1|2)/(0|20)/" if QUICK else "BM_"
@@ -305,7 +332,7 @@ if want("sph"):
         details.append("### SPH engine step benchmark\n\nNot built (configure with -DCEMENTSPH_BUILD_BENCHMARKS=ON and build SPHStepBenchmark).\n")
 
 def peers():
-    # 6. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
+    # 7. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
     if not QUICK and want("peers"):
         drr = exe(BUILD, "drr-bench")
         if drr:
