@@ -86,9 +86,11 @@ TEST(InjectSlices, TipShaftAndLeakClassesFromTheRun) {
   const auto r = runProgram(CEMENTSPH_EXECUTABLE, injectArgs(out));
   ASSERT_EQ(r.exitCode, 0) << r.err;
   expectTipShaftAndLeaks(out);
-  // No vertebra outline without a label map.
+  // Without a label map the vertebra is the bone rule's (the run's anatomy_labels.nrrd), outlined all the same
+  // (issue 20 item 6; AnatomyLabelsTest checks that map against the phantom's analytic body).
   const auto counts = colourCounts(out / "cement_slices.png");
-  EXPECT_EQ(counts.count({0, 200, 80}), 0u);
+  ASSERT_EQ(counts.count({0, 200, 80}), 1u);
+  EXPECT_GE(counts.at({0, 200, 80}), 300);
 }
 
 TEST(InjectSlices, WithALabelMapTheTargetVertebraIsOutlined) {
