@@ -54,6 +54,26 @@ void addText(vtkRenderer* renderer, const std::string& text, double x, double y,
   renderer->AddViewProp(actor);
 }
 
+// Adds `surface` to `scene` in one colour (opacity 1: opaque) and grows `box` (xmin, xmax, ymin, ...) to hold it.
+void addSurface(vtkRenderer* scene, vtkPolyData* surface, const double rgb[3], double opacity, double box[6]) {
+  double b[6];
+  surface->GetBounds(b);
+  for (int i = 0; i < 3; ++i) {
+    box[2 * i] = std::min(box[2 * i], b[2 * i]);
+    box[2 * i + 1] = std::max(box[2 * i + 1], b[2 * i + 1]);
+  }
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(surface);
+  mapper->ScalarVisibilityOff();
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetColor(rgb[0], rgb[1], rgb[2]);
+  if (opacity < 1) actor->GetProperty()->SetOpacity(opacity);
+  actor->GetProperty()->SetAmbient(0.35); // keeps the colours readable on faces turned from the light
+  actor->GetProperty()->SetDiffuse(0.65);
+  scene->AddActor(actor);
+}
+
 } // namespace
 
 void writeCementSurface(vtkImageData* labels, const std::filesystem::path& png, const CementSurfaceOptions& options) {
@@ -78,21 +98,7 @@ void writeCementSurface(vtkImageData* labels, const std::filesystem::path& png, 
     if (voxels == 0) continue;
     const auto surface = surfacemetrics::isosurface(mask, iso);
     if (surface->GetNumberOfPoints() == 0) continue;
-    double b[6];
-    surface->GetBounds(b);
-    for (int i = 0; i < 3; ++i) {
-      box[2 * i] = std::min(box[2 * i], b[2 * i]);
-      box[2 * i + 1] = std::max(box[2 * i + 1], b[2 * i + 1]);
-    }
-    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-    mapper->SetInputData(surface);
-    mapper->ScalarVisibilityOff();
-    auto actor = vtkSmartPointer<vtkActor>::New();
-    actor->SetMapper(mapper);
-    actor->GetProperty()->SetColor(rgb[0], rgb[1], rgb[2]);
-    actor->GetProperty()->SetAmbient(0.35); // keeps the colours readable on faces turned from the light
-    actor->GetProperty()->SetDiffuse(0.65);
-    scene->AddActor(actor);
+    addSurface(scene, surface, rgb, 1.0, box);
   }
   if (!(box[0] <= box[1]))
     throw std::invalid_argument("writeCementSurface: the cement has no surface inside the image");
@@ -105,22 +111,7 @@ void writeCementSurface(vtkImageData* labels, const std::filesystem::path& png, 
     const auto vertebra = maskOf(options.vertebraMask, options.vertebraLabel, vertebraVoxels);
     const auto surface = vertebraVoxels > 0 ? surfacemetrics::isosurface(vertebra, iso) : nullptr;
     if (surface && surface->GetNumberOfPoints() > 0) {
-      double b[6];
-      surface->GetBounds(b);
-      for (int i = 0; i < 3; ++i) {
-        box[2 * i] = std::min(box[2 * i], b[2 * i]);
-        box[2 * i + 1] = std::max(box[2 * i + 1], b[2 * i + 1]);
-      }
-      auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-      mapper->SetInputData(surface);
-      mapper->ScalarVisibilityOff();
-      auto actor = vtkSmartPointer<vtkActor>::New();
-      actor->SetMapper(mapper);
-      actor->GetProperty()->SetColor(bone[0], bone[1], bone[2]);
-      actor->GetProperty()->SetOpacity(options.vertebraOpacity);
-      actor->GetProperty()->SetAmbient(0.35);
-      actor->GetProperty()->SetDiffuse(0.65);
-      scene->AddActor(actor);
+      addSurface(scene, surface, bone, options.vertebraOpacity, box);
       vertebraShown = true;
     }
   }
