@@ -19,6 +19,7 @@
 //    out here (Kozeny-Carman, d 0.3 mm; to float precision), halved at theta 60 degrees; and a uniform entry
 //    pressure shifts the tip pressure by exactly p_e and leaves the fill (to the solver's tolerance: 2 % of p_e).
 #include "cementsph/phantom/VertebraPhantom.h"
+#include "VertebraVariant.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include <gtest/gtest.h>
@@ -38,11 +39,7 @@ struct Variant {
   phantom::VertebraResult phantom;
   std::array<double, 3> besideVein, fat;
   Variant() {
-    phantom::VertebraOptions o;
-    o.fieldMm = {64, 70, 57};
-    o.marrowFatRadiusMm = 5;
-    o.discHeightMm = 10;
-    o.veinRadiusMm = 2;
+    const phantom::VertebraOptions o = cementsph::testing::vertebraAnatomyVariant();
     phantom = phantom::makeVertebra(o);
     const std::array<double, 3> centre{o.fieldMm[0] / 2, 21, o.fieldMm[2] / 2};
     // The vein's axis runs from centre + (-4, 2, -5) to centre + (-22, 20, -5) (VertebraPhantom.cpp) and leaves

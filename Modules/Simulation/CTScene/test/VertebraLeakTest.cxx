@@ -6,6 +6,7 @@
 // injected volume; never a figure of an earlier run.
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/phantom/VertebraPhantom.h"
+#include "VertebraVariant.h"
 #include "cementsph/scene/InjectionRunner.h"
 
 #include <gtest/gtest.h>
@@ -24,11 +25,7 @@ struct Variant {
   phantom::VertebraResult phantom;
   std::array<double, 3> centre, fat, disc, canal;
   Variant() {
-    phantom::VertebraOptions o;
-    o.fieldMm = {64, 70, 57};
-    o.marrowFatRadiusMm = 5;
-    o.discHeightMm = 10;
-    o.veinRadiusMm = 2;
+    const phantom::VertebraOptions o = cementsph::testing::vertebraAnatomyVariant();
     phantom = phantom::makeVertebra(o);
     centre = {o.fieldMm[0] / 2, 21, o.fieldMm[2] / 2};
     fat = {centre[0] + 7, centre[1] - 3, centre[2] + 2};
