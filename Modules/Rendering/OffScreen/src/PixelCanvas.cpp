@@ -161,7 +161,7 @@ int annotatePanel(PixelCanvas& canvas, int x, int y, int w, int h, const PanelAn
   const Rgb black{0, 0, 0};
   const PanelMargins m = annotationMargins(fontPx);
   const int row = m.top / 2;
-  canvas.text(a.title, x - m.left, y - 2 * row + 3, fontPx, black, false, w + m.left + m.right);
+  canvas.text(a.title, x - m.left, y - 2 * row + 3, fontPx, black, false, a.titleWidthPx > 0 ? a.titleWidthPx : w + m.left + m.right);
   auto letter = [&](char c, int cx, int cy) { // centred on (cx, cy)
     const std::string s(1, c);
     const auto size = PixelCanvas::textSize(s, fontPx, true);

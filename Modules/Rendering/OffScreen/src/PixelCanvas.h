@@ -71,6 +71,7 @@ struct PanelAnnotation {
   char left = '?', right = '?', top = '?', bottom = '?';
   double mmPerPixel = 1.0;           // along the panel's horizontal axis
   double scaleBarMm = 10.0;          // halved until bar and label fit the panel's width; 0: no bar
+  int titleWidthPx = 0;              // the title's room (px) from the left margin; 0: the panel and its side margins
 };
 struct PanelMargins {
   int left = 0, right = 0, top = 0, bottom = 0;

@@ -120,8 +120,22 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
   const int gap = std::max(0, options.gapPx);
   const int panelW = nx * scale, panelH = ny * scale;
   // Each panel sits in its labels' margins (none without annotate), the cells gap px apart.
-  const detail::PanelMargins m =
+  detail::PanelMargins m =
       options.annotate ? detail::annotationMargins(options.fontPx) : detail::PanelMargins{};
+  const std::string rowNames[2] = {options.postRowName, "simulated CT"};
+  // Each panel's title ("post (phantom, simulated), axial z = 16.9 mm") can be wider than a small volume's panel:
+  // the right margin grows to the widest title, so no title is cut.
+  auto titleOf = [&](std::size_t r, double zMm) {
+    double direction[9];
+    std::copy_n(rows[r]->GetDirectionMatrix()->GetData(), 9, direction);
+    std::ostringstream title;
+    title << rowNames[r] << ", " << detail::planeName(direction, views[r].fixed) << " z = " << std::fixed
+          << std::setprecision(1) << zMm << " mm";
+    return title.str();
+  };
+  if (options.annotate)
+    for (std::size_t r = 0; r < rows.size(); ++r)
+      for (double zMm : z) m.right = std::max(m.right, detail::PixelCanvas::textSize(titleOf(r, zMm), options.fontPx)[0] + 4 - m.left - panelW);
   const int cellW = m.left + panelW + m.right, cellH = m.top + panelH + m.bottom;
   const int width = gap + static_cast<int>(z.size()) * (cellW + gap);
   const int height = gap + static_cast<int>(rows.size()) * (cellH + gap);
@@ -131,7 +145,6 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
 
   detail::PixelCanvas canvas(width, height, {255, 255, 255});
   const double span = options.windowHighHU - options.windowLowHU;
-  const std::string rowNames[2] = {options.postRowName, "simulated CT"};
   for (std::size_t r = 0; r < rows.size(); ++r) {
     vtkImageData* v = rows[r];
     const detail::PanelAxes& q = views[r];
@@ -168,10 +181,8 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
       }
       if (!options.annotate) continue;
       detail::PanelAnnotation a;
-      std::ostringstream title;
-      title << rowNames[r] << ", " << detail::planeName(direction, q.fixed) << " z = " << std::fixed << std::setprecision(1)
-            << z[c] << " mm";
-      a.title = title.str();
+      a.title = titleOf(r, z[c]);
+      a.titleWidthPx = cellW;
       a.left = detail::patientLetter(direction, q.u, -q.uSign);
       a.right = detail::patientLetter(direction, q.u, q.uSign);
       a.top = detail::patientLetter(direction, q.v, -q.vSign);

@@ -97,15 +97,15 @@ Glyph tight(const std::vector<double>& ink, int w, int h) {
   return g;
 }
 
-Glyph renderLetter(char letter, int fontPx) {
+Glyph renderText(const std::string& text, int fontPx, bool bold) {
   vtkNew<vtkTextProperty> property;
   property->SetFontFamilyToArial();
   property->SetFontSize(fontPx);
-  property->SetBold(true);
+  property->SetBold(bold);
   property->SetColor(0, 0, 0);
   vtkNew<vtkImageData> image;
   int size[2];
-  EXPECT_TRUE(vtkFreeTypeTools::GetInstance()->RenderString(property, vtkStdString(std::string(1, letter)), 72, image, size));
+  EXPECT_TRUE(vtkFreeTypeTools::GetInstance()->RenderString(property, vtkStdString(text), 72, image, size));
   int extent[6];
   image->GetExtent(extent);
   std::vector<double> ink(static_cast<std::size_t>(size[0]) * static_cast<std::size_t>(size[1]));
@@ -115,6 +115,8 @@ Glyph renderLetter(char letter, int fontPx) {
           image->GetScalarComponentAsDouble(extent[0] + x, extent[2] + size[1] - 1 - y, 0, 3) / 255.0;
   return tight(ink, size[0], size[1]);
 }
+
+Glyph renderLetter(char letter, int fontPx) { return renderText(std::string(1, letter), fontPx, true); }
 
 Glyph inkIn(const Picture& p, Rect r) {
   r.x0 = std::max(0, r.x0), r.y0 = std::max(0, r.y0), r.x1 = std::min(p.width, r.x1), r.y1 = std::min(p.height, r.y1);
@@ -484,4 +486,28 @@ TEST(LabelledSliceComparison, AxialPanelsCarryLettersAndScaleBar) {
     ASSERT_EQ(picture.pixels.size(), p.pixels.size()) << name;
     EXPECT_EQ(differingPixels(picture, p), 0u) << name << " differs from the LPS CT's picture";
   }
+}
+
+// A title wider than its panel (a long row name over a 40-voxel volume) is drawn whole: the ink in the title row
+// is as wide as FreeType's own rendering of the whole title. Arial's digits share one advance width, so the
+// slice's z (unknown to the test) is stood in for by "00.0"; the tight ink box then differs by at most a pixel.
+// Before the margin grew with the title, the title was cut at the panel and its side margins (about 200 px here).
+TEST(LabelledSliceComparison, ATitleWiderThanItsPanelIsDrawnWhole) {
+  const auto dir = scratchFolder();
+  auto post = volume(VTK_FLOAT, 300.0);
+  for (int j = 10; j < 20; ++j)
+    for (int i = 15; i < 25; ++i) post->SetScalarComponentFromDouble(i, j, 12, 0, 2000.0);
+  SliceComparisonOptions o;
+  o.postRowName = "post (phantom, simulated)";
+  renderSliceComparison(post, nullptr, dir / "slices.png", 5.0, o);
+  const Picture p = readPicture(dir / "slices.png");
+  const auto panels = findPanels(p, Rgb{58, 58, 58});
+  ASSERT_EQ(panels.size(), 1u) << "one slice through a one-plane slab";
+  const int row = o.fontPx + 6; // the title row sits two text rows above the panel
+  const Glyph title = inkIn(p, {0, panels[0].y0 - 2 * row, p.width, panels[0].y0 - row});
+  const Glyph expected = renderText("post (phantom, simulated), axial z = 00.0 mm", o.fontPx, false);
+  std::cout << "title ink " << title.width << " px wide, FreeType's whole title " << expected.width << " px, panel "
+            << panels[0].width() << " px\n";
+  ASSERT_GT(expected.width, panels[0].width() + 40) << "the case must have a title wider than its panel";
+  EXPECT_NEAR(title.width, expected.width, 2);
 }
