@@ -68,10 +68,14 @@ VertebraResult makeVertebra(const VertebraOptions& o) {
   r.canalCentreMm = {cx, cy + kB + kCanalRadius, cz};
   r.foramenMm = {cx, cy + kB - 0.5 * kCortex, cz};
   // Transpedicular: from posterior-left through the pedicle, the tip 3 mm left of and 9 mm behind the body's
-  // centre, 6 mm in front of the posterior wall: 4 ml then reaches the foramen (the demo's leak).
+  // centre, 6 mm in front of the posterior wall: 4 ml then reaches the foramen (the demo's leak). The shaft runs
+  // back from the tip through the middle of the left pedicle, the arch's wall beside the canal's centre
+  // (cx + (kCanalRadius + kArchOuter) / 2, the canal's y): (7, 14) mm behind the tip, so it passes 2 mm lateral
+  // of the canal and never crosses it (the earlier (-0.3, -0.954) ran through the canal 8.7-16.2 mm behind the tip).
   r.suggestedTipMm = {cx + 3.0, cy + 9.0, cz};
-  const double dx = -0.3, dy = -0.954;
-  r.suggestedDirection = {dx, dy, 0.0};
+  const double backX = 0.5 * (kCanalRadius + kArchOuter) - 3.0, backY = r.canalCentreMm[1] - r.suggestedTipMm[1];
+  const double length = std::hypot(backX, backY);
+  r.suggestedDirection = {-backX / length, -backY / length, 0.0};
   r.bodySemiAxesMm = {kA, kB, kHalfHeight};
   // The variant's geometry (fixed offsets from the body's centre, chosen so that fat and vein stay 3 mm apart
   // and the vein leaves through the posterolateral wall, clear of the posterior arch).
