@@ -78,55 +78,64 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// What a run gives the pictures: its metrics, and its simulated CT and cement label map on the input CT's grid
-// (the filter's output ports 0 and 1; the same voxels as simulated_ct.nrrd and cement_labels.nrrd).
+// What a run gives the pictures: its typed result (summary, outlet series; InjectionRunner.h), and its simulated CT
+// and cement label map on the input CT's grid (the filter's output ports 0 and 1; the same voxels as
+// simulated_ct.nrrd and cement_labels.nrrd).
 struct InjectRun {
-  json metrics;
+  scene::InjectionRunResult result;
   vtkSmartPointer<vtkImageData> simulatedCt, cementLabels;
   // The vertebra on the same grid: the --labels map (its label label_table's target_vertebra, or -1: the label
-  // at the tip), else the anatomy the run judged leakage by (anatomy_labels.nrrd, the target vertebra 1); null
-  // when the run had none (the HU rule).
+  // at the tip), else the anatomy the run judged leakage by (the result's, as anatomy_labels.nrrd holds it: the
+  // target vertebra 1); null when the run had none (the HU rule).
   vtkSmartPointer<vtkImageData> vertebra;
   int vertebraLabel = -1;
 };
 
-// The largest leakage site of the run's metrics (leakage_sites: volume_ml, position_mm), if any leaked.
-std::optional<std::array<double, 3>> largestLeakMm(const json& m) {
+// The largest leakage site of the run, if any leaked.
+std::optional<std::array<double, 3>> largestLeakMm(const scene::InjectionSummary& s) {
   std::optional<std::array<double, 3>> at;
   double largest = 0;
-  if (!m.contains("leakage_sites")) return at;
-  for (const auto& site : m["leakage_sites"])
-    if (site["volume_ml"].get<double>() > largest) {
-      largest = site["volume_ml"].get<double>();
-      at = std::array<double, 3>{};
-      for (int axis = 0; axis < 3; ++axis) (*at)[std::size_t(axis)] = site["position_mm"][axis].get<double>();
+  for (const scene::LeakageSite& site : s.leakageSites)
+    if (site.volumeMl > largest) {
+      largest = site.volumeMl;
+      at = site.positionMm;
     }
   return at;
 }
 
 // cement_slices.png: through the largest leak if there is one, else through the tip; the cannula, each leak in its
-// site class's colour (the nearest site of metrics.json) and the target vertebra's outline (--labels or the bone
-// rule's anatomy_labels.nrrd).
+// site class's colour (the run's nearest site) and the target vertebra's outline (--labels or the bone rule's).
 void drawCementSlices(const InjectRun& run, const scene::SceneConfig& scene, const fs::path& png) {
-  const json& m = run.metrics;
   rendering::InjectionMarks marks; // the same marks as plan's best/cement_slices.png
   marks.tipMm = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
   marks.direction = {scene.direction.x(), scene.direction.y(), scene.direction.z()};
-  for (const auto& site : m.value("leakage_sites", json::array()))
-    marks.leaks.push_back({{site["position_mm"].get<std::array<double, 3>>(), site["site_class"].get<std::string>()},
-                           site["volume_ml"].get<double>()});
+  for (const scene::LeakageSite& site : run.result.summary.leakageSites)
+    marks.leaks.push_back({{site.positionMm, site.siteClass}, site.volumeMl});
   // The vertebra's outline, with or without --labels.
   marks.vertebraMask = run.vertebra;
   marks.vertebraLabel = run.vertebraLabel;
   rendering::writeCementSlices(run.simulatedCt, run.cementLabels, marks.centreMm(), png, marks.options());
 }
 
+// The label of the --labels map at the tip (0 outside the map), for --labels without target_vertebra.
+int labelAtTip(vtkImageData* labels, const scene::SceneConfig& scene) {
+  double tip[3] = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()}, index[3];
+  labels->TransformPhysicalPointToContinuousIndex(tip, index);
+  int ijk[3], dims[3];
+  labels->GetDimensions(dims);
+  for (int a = 0; a < 3; ++a) {
+    ijk[a] = int(std::lround(index[a]));
+    if (ijk[a] < 0 || ijk[a] >= dims[a]) return 0;
+  }
+  return int(std::lround(labels->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0)));
+}
+
 // cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the
 // largest leak (from the tip towards it, a little from above), so the cement in bone does not hide it.
 void drawCementSurface(const InjectRun& run, const scene::SceneConfig& scene, const fs::path& png) {
-  const json& m = run.metrics;
+  const scene::InjectionSummary& s = run.result.summary;
   rendering::CementSurfaceOptions options;
-  if (const auto leak = largestLeakMm(m)) {
+  if (const auto leak = largestLeakMm(s)) {
     double d[3], norm = 0;
     for (int axis = 0; axis < 3; ++axis) {
       d[axis] = (*leak)[std::size_t(axis)] - (*scene.tipMm)[axis];
@@ -136,42 +145,46 @@ void drawCementSurface(const InjectRun& run, const scene::SceneConfig& scene, co
     if (norm > 1e-6)
       for (int axis = 0; axis < 3; ++axis) options.viewDirection[axis] = d[axis] / norm + (axis == 2 ? 0.35 : 0.0);
   }
-  if (m.contains("leakage_volume_ml") && m["leakage_volume_ml"].get<double>() > 0) {
+  if (s.leakageVolumeMl > 0) {
     std::ostringstream leakNote;
-    leakNote << std::setprecision(3) << "leaked " << m["leakage_volume_ml"].get<double>() << " ml at "
-             << m["leakage_sites"].size() << (m["leakage_sites"].size() == 1 ? " site" : " sites");
+    leakNote << std::setprecision(3) << "leaked " << s.leakageVolumeMl << " ml at " << s.leakageSites.size()
+             << (s.leakageSites.size() == 1 ? " site" : " sites");
     options.note = leakNote.str();
   }
   // The vertebra around the cement, translucent: its label, or (--labels without target_vertebra) the one at the tip.
   options.vertebraMask = run.vertebra;
   options.vertebraLabel = run.vertebraLabel;
   if (run.vertebra && run.vertebraLabel < 0) {
-    double tip[3] = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()}, index[3];
-    run.vertebra->TransformPhysicalPointToContinuousIndex(tip, index);
-    int ijk[3], dims[3];
-    run.vertebra->GetDimensions(dims);
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-      ijk[a] = int(std::lround(index[a]));
-      inside = inside && ijk[a] >= 0 && ijk[a] < dims[a];
-    }
-    options.vertebraLabel = inside ? int(std::lround(run.vertebra->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0))) : 0;
+    options.vertebraLabel = labelAtTip(run.vertebra, scene);
     if (options.vertebraLabel == 0) options.vertebraMask = nullptr; // the tip is in no labelled structure
   }
   rendering::writeCementSurface(run.cementLabels, png, options);
 }
 
-void printSummary(const json& m, const std::string& out) {
-  std::cout << "injected " << m["volume_injected_ml"].get<double>() << " ml in " << m["steps"] << " steps, "
-            << m["wall_time_s"].get<double>() << " s wall (real-time factor " << m["real_time_factor"].get<double>()
-            << "); model " << m["pressure_model"].get<std::string>() << ", " << m["cement_points"]
-            << (m.contains("fluid_particles") ? " particles" : " voxels holding cement")
-            << (m.contains("escaped_particles") ? ", " + m["escaped_particles"].dump() + " left the region" : std::string())
+void printSummary(const scene::InjectionSummary& s, const std::string& out) {
+  const double realTimeFactor = s.wallTimeS > 0 ? s.simulatedTimeS / s.wallTimeS : 0.0; // as metrics.json's
+  std::cout << "injected " << s.volumeInjectedMl << " ml in " << s.steps << " steps, " << s.wallTimeS
+            << " s wall (real-time factor " << realTimeFactor << "); model " << s.engine << ", " << s.cementPoints
+            << (s.particles ? " particles" : " voxels holding cement")
+            << (s.particles ? ", " + std::to_string(s.particles->escaped) + " left the region" : std::string())
             << "; results in " << out << "\n";
 }
 
+// The outlet's series as tip_pressure.csv holds it, from the run in memory (the plots draw it, not the file).
+rendering::TipPressureSeries tipPressureSeries(const scene::InjectionRunResult& r) {
+  rendering::TipPressureSeries series;
+  for (const scene::TipRecord& t : r.tipSeries) {
+    series.timeS.push_back(t.time);
+    series.pressurePa.push_back(t.tipPa);
+    series.pressureMinusBaselinePa.push_back(t.tipPa - r.summary.tipPressureBaselinePa);
+    series.cannulaPa.push_back(t.cannulaPa);
+    series.injectionPa.push_back(t.tipPa + t.cannulaPa);
+  }
+  return series;
+}
+
 // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files; returns
-// its metrics and its outputs in memory, which the pictures draw (rather than reading back the files).
+// its typed result and its outputs in memory, which the pictures draw (rather than reading back the files).
 InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
   const auto image = imaging::readVolume(a.ct);
   const auto spacing = image->GetSpacing();
@@ -186,15 +199,15 @@ InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
   filter->Update();
   filter->RethrowIfFailed();
   InjectRun run;
-  run.metrics = json::parse(filter->GetMetricsJSON());
+  run.result = *filter->GetResult();
   run.simulatedCt = filter->GetSimulatedCTOutput();
   run.cementLabels = filter->GetLabelMapOutput();
   if (!scene.labelsPath.empty()) {
-    run.vertebra = imaging::toVtk(imaging::readVolume(scene.labelsPath).GetPointer());
+    run.vertebra = imaging::toVtk(imaging::readVolume(scene.labelsPath).GetPointer()); // the user's input
     if (scene.labelTable.is_object()) run.vertebraLabel = scene.labelTable.value("target_vertebra", -1);
-  } else if (const fs::path anatomy = fs::path(a.out) / "anatomy_labels.nrrd"; fs::exists(anatomy)) {
-    run.vertebra = imaging::toVtk(imaging::readVolume(anatomy.string()).GetPointer()); // the driver wrote it
-    run.vertebraLabel = 1;                                                           // anatomy::TissueClass
+  } else if (run.result.anatomyLabelsFile) {
+    run.vertebra = imaging::toVtk(run.result.anatomyLabelsFile.GetPointer());
+    run.vertebraLabel = 1; // anatomy::TissueClass
   }
   return run;
 }
@@ -209,9 +222,8 @@ int runInject(const InjectRequest& a, json* metrics) {
   }
   if (a.threads > 0) omp_set_num_threads(a.threads);
   const InjectRun run = runFilter(a, scene);
-  const json& m = run.metrics;
-  if (metrics) *metrics = m;
-  printSummary(m, a.out);
+  if (metrics) *metrics = run.result.metrics;
+  printSummary(run.result.summary, a.out);
   if (a.noPictures) return 0;
   const fs::path out(a.out);
   PictureSteps pictures("inject");
@@ -222,14 +234,15 @@ int runInject(const InjectRequest& a, json* metrics) {
       announce(png);
     });
   };
-  step("tip_pressure.png", [&](const fs::path& png) { rendering::writeTipPressurePlot(out / "tip_pressure.csv", png); });
+  const rendering::TipPressureSeries tip = tipPressureSeries(run.result);
+  step("tip_pressure.png", [&](const fs::path& png) { rendering::writeTipPressurePlot(tip, png); });
   // Only an engine that labels its cement (the driver then wrote cement_labels.nrrd) gets the label pictures.
-  if (fs::exists(out / "cement_labels.nrrd")) {
+  if (run.result.cementLabels) {
     step("cement_slices.png", [&](const fs::path& png) { drawCementSlices(run, scene, png); });
     step("cement_surface.png", [&](const fs::path& png) { drawCementSurface(run, scene, png); });
   }
   step("injection_pressure.png",
-       [&](const fs::path& png) { rendering::writeInjectionPressurePlot(out / "tip_pressure.csv", png); });
+       [&](const fs::path& png) { rendering::writeInjectionPressurePlot(tip, png); });
   if (scene.simulatedCtSnapshots)
     pictures.draw("xray/", out / "xray", [&](const fs::path&) {
       XrayRequest xray;

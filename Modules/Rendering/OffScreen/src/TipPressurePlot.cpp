@@ -72,7 +72,11 @@ TipPressureSeries readTipPressureCsv(const std::filesystem::path& csv) {
 
 void writeTipPressurePlot(const std::filesystem::path& csv, const std::filesystem::path& png,
                           const TipPressurePlotOptions& options) {
-  const TipPressureSeries data = readTipPressureCsv(csv);
+  writeTipPressurePlot(readTipPressureCsv(csv), png, options);
+}
+
+void writeTipPressurePlot(const TipPressureSeries& data, const std::filesystem::path& png,
+                          const TipPressurePlotOptions& options) {
   PlotSpec spec;
   spec.title = options.minusBaseline ? "Tip pressure above baseline" : "Injection pressure at the cannula tip";
   spec.xLabel = "time (s)";
@@ -94,6 +98,13 @@ void writeInjectionPressurePlot(const std::filesystem::path& csv, const std::fil
   const TipPressureSeries data = readTipPressureCsv(csv);
   if (data.injectionPa.empty())
     throw std::runtime_error(csv.string() + ": no cannula_pressure_drop_pa and injection_pressure_pa columns");
+  writeInjectionPressurePlot(data, png, options);
+}
+
+void writeInjectionPressurePlot(const TipPressureSeries& data, const std::filesystem::path& png,
+                                const TipPressurePlotOptions& options) {
+  if (data.injectionPa.size() != data.timeS.size() || data.cannulaPa.size() != data.timeS.size())
+    throw std::runtime_error(png.string() + ": the series has no cannula and injection pressure for every time");
   PlotSpec spec;
   spec.title = "Injection pressure: syringe, cannula and outlet";
   spec.xLabel = "time (s)";

@@ -25,6 +25,11 @@
 // Output port 2: the cement as points, vtkPolyData (mm, the CT's frame): the particles of a particle engine
 //   (velocity_m_per_s, density_kg_per_m3, pressure_pa, age_s, ...) or one point per voxel holding cement
 //   (fill_fraction, cement_volume_mm3, ...), InjectionModel::cement().
+// ProduceImageOutputs (on by default) off: outputs 0 and 1 stay empty, so a run costs no pass over the whole
+//   input grid (the paste-back and the label map: tens of millions of voxels on a clinical CT, per run). For a
+//   caller that reads only the typed result and the cement points (plan's evaluations, InjectionPlanner.cpp).
+// The typed result (GetResult(): summary, tip-pressure series, the region's images, the anatomy labels, ...) is
+//   kept after each run, so a caller reads the run, not the files it wrote.
 // Parameters: the scene's values by typed setters (SetScene sets all of them at once, including the
 // viscosity table, integrator, bone and model overrides that have no setter of their own). OutputDirectory
 // non-empty: the driver's files (metrics.json, simulated_ct.nrrd on the region, ...) are written there too.
@@ -36,6 +41,7 @@
 #pragma once
 
 #include "cementsph/scene/InjectionModel.h"
+#include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneConfig.h"
 
 #include <vtkImageAlgorithm.h>
@@ -96,6 +102,10 @@ public:
   vtkGetMacro(HUPerRelativeDensity, double);
   vtkSetMacro(PrintProgress, bool);
   vtkGetMacro(PrintProgress, bool);
+  // Off: no simulated CT nor label map on the input grid (outputs 0 and 1 empty); the result and points as ever.
+  vtkSetMacro(ProduceImageOutputs, bool);
+  vtkGetMacro(ProduceImageOutputs, bool);
+  vtkBooleanMacro(ProduceImageOutputs, bool);
   void SetOutputDirectory(const std::string& dir);
   const std::string& GetOutputDirectory() const { return this->OutputDirectory; }
 
@@ -109,8 +119,12 @@ public:
   vtkPolyData* GetParticlesOutput() { return this->GetCementPointsOutput(); } // the name before the rework
   // metrics.json of the last run ("" before one, or after a failed one).
   const std::string& GetMetricsJSON() const { return this->MetricsJSON; }
-  // The typed summary of the last successful run (InjectionModel.h); nullptr before one.
-  const cementsph::scene::InjectionSummary* GetSummary() const { return this->Summary ? &*this->Summary : nullptr; }
+  // The typed result of the last successful run (InjectionRunner.h: the driver's InjectionRunResult, metrics
+  // as metrics.json holds them, the outlet's time series, the region's simulated CT and labels, the images the
+  // files hold); nullptr before one, or after a failed one.
+  const cementsph::scene::InjectionRunResult* GetResult() const { return this->Result ? &*this->Result : nullptr; }
+  // Its summary (InjectionModel.h); nullptr as GetResult().
+  const cementsph::scene::InjectionSummary* GetSummary() const { return this->Result ? &this->Result->summary : nullptr; }
   const std::string& GetErrorMessage() const { return this->ErrorMessage; }
   void RethrowIfFailed() const;
 
@@ -134,11 +148,24 @@ protected:
   bool CannulaWall;
   double HUPerRelativeDensity = 3000.0;
   bool PrintProgress = false;
+  bool ProduceImageOutputs = true;
   std::string OutputDirectory;
   cementsph::scene::SceneConfig Base; // the values without a setter of their own
   std::string MetricsJSON, ErrorMessage;
-  std::optional<cementsph::scene::InjectionSummary> Summary;
+  std::optional<cementsph::scene::InjectionRunResult> Result;
   std::exception_ptr Error;
+  // The input as the driver takes it (an ITK copy), kept while the input is the same object with the same
+  // modification time: a plan runs dozens of injections on one CT, and the copy is a pass over every voxel.
+  // Held as long as the filter (one scan's worth of float voxels).
+  cementsph::imaging::ImageType::Pointer InputCopy;
+  const vtkImageData* InputCopySource = nullptr;
+  vtkMTimeType InputCopyTime = 0;
+
+  // Outputs 0 and 1 from the run (the rules are above, output ports 0 and 1).
+  void FillImageOutputs(vtkImageData* input, vtkImageData* mask, const cementsph::imaging::ImageType* ct,
+                        const cementsph::scene::InjectionRunResult& r, const cementsph::scene::SceneConfig& scene,
+                        vtkImageData* simulated, vtkImageData* labels) const;
+  const cementsph::imaging::ImageType* InputAsItk(vtkImageData* input);
 
 private:
   vtkSPHInjectionFilter(const vtkSPHInjectionFilter&) = delete;

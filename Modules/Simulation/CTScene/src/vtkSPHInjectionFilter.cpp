@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 vtkStandardNewMacro(vtkSPHInjectionFilter);
 
@@ -112,6 +113,7 @@ void vtkSPHInjectionFilter::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "Scene: " << cementsph::scene::toJson(this->GetScene()).dump() << "\n";
   os << indent << "OutputDirectory: " << this->OutputDirectory << "\n";
+  os << indent << "ProduceImageOutputs: " << this->ProduceImageOutputs << "\n";
 }
 
 void vtkSPHInjectionFilter::SetOutputDirectory(const std::string& dir) {
@@ -229,6 +231,38 @@ int vtkSPHInjectionFilter::RequestUpdateExtent(vtkInformation*, vtkInformationVe
   return 1;
 }
 
+const cementsph::imaging::ImageType* vtkSPHInjectionFilter::InputAsItk(vtkImageData* input) {
+  if (!this->InputCopy || this->InputCopySource != input || this->InputCopyTime != input->GetMTime()) {
+    this->InputCopy = nullptr; // the old copy goes before the new one is made: one scan's copy at a time
+    this->InputCopy = cementsph::imaging::imageFromVtk(input);
+    this->InputCopySource = input;
+    this->InputCopyTime = input->GetMTime();
+  }
+  return this->InputCopy.GetPointer();
+}
+
+void vtkSPHInjectionFilter::FillImageOutputs(vtkImageData* input, vtkImageData* mask,
+                                             const cementsph::imaging::ImageType* ct,
+                                             const cementsph::scene::InjectionRunResult& r,
+                                             const cementsph::scene::SceneConfig& scene, vtkImageData* simulated,
+                                             vtkImageData* labels) const {
+  // The whole input grid: the input's HU with the simulated region of interest pasted in. The driver's
+  // simulated CT lies on the AXIS-ALIGNED CT's grid (a reorientation or resampling when the input's
+  // direction is not the identity), so it goes back through physical points, not through its indices.
+  const auto background = cementsph::scene::alignedBackgroundOn(ct, r.simulatedCt);
+  const auto full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
+  vtkSmartPointer<vtkImageData> image = cementsph::imaging::toVtk(full);
+  vtkSmartPointer<vtkImageData> labelMap = cementLabels(input, ct, full, r, mask, scene, this->HUPerRelativeDensity);
+  simulated->ShallowCopy(image);
+  simulated->GetPointData()->GetScalars()->SetName("simulated_ct_hu");
+  // The input's own extent numbering (toVtk starts at 0; a cropped reader's output need not).
+  simulated->SetExtent(input->GetExtent());
+  simulated->SetOrigin(input->GetOrigin());
+  simulated->SetSpacing(input->GetSpacing());
+  simulated->SetDirectionMatrix(input->GetDirectionMatrix());
+  labels->ShallowCopy(labelMap);
+}
+
 int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                        vtkInformationVector* outputVector) {
   vtkImageData* input = vtkImageData::GetData(inputVector[0]);
@@ -239,7 +273,7 @@ int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** i
   this->Error = nullptr;
   this->ErrorMessage.clear();
   this->MetricsJSON.clear();
-  this->Summary.reset();
+  this->Result.reset();
   simulated->Initialize();
   labels->Initialize();
   points->Initialize();
@@ -251,7 +285,7 @@ int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** i
     if (mask && !sameGrid(input, mask))
       throw std::invalid_argument("vtkSPHInjectionFilter: the bone mask on input port 1 is not on the CT's grid "
                                   "(same dimensions, origin and spacing required)");
-    const auto ct = cementsph::imaging::imageFromVtk(input);
+    const cementsph::imaging::ImageType* ct = this->InputAsItk(input);
     const cementsph::scene::SceneConfig scene = this->GetScene();
     cementsph::scene::InjectionRunOptions o;
     o.outDir = this->OutputDirectory;
@@ -262,32 +296,17 @@ int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** i
       return !this->GetAbortExecute();
     };
     this->UpdateProgress(0.0);
-    const auto r = cementsph::scene::runInjection(ct, scene, o);
-    // The whole input grid: the input's HU with the simulated region of interest pasted in. The driver's
-    // simulated CT lies on the AXIS-ALIGNED CT's grid (a reorientation or resampling when the input's
-    // direction is not the identity), so it goes back through physical points, not through its indices.
-    const auto background = cementsph::scene::alignedBackgroundOn(ct, r.simulatedCt);
-    const auto full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
-    vtkSmartPointer<vtkImageData> image = cementsph::imaging::toVtk(full);
-    vtkSmartPointer<vtkImageData> labelMap =
-        cementLabels(input, ct, full, r, mask, scene, this->HUPerRelativeDensity);
-    simulated->ShallowCopy(image);
-    simulated->GetPointData()->GetScalars()->SetName("simulated_ct_hu");
-    // The input's own extent numbering (toVtk starts at 0; a cropped reader's output need not).
-    simulated->SetExtent(input->GetExtent());
-    simulated->SetOrigin(input->GetOrigin());
-    simulated->SetSpacing(input->GetSpacing());
-    simulated->SetDirectionMatrix(input->GetDirectionMatrix());
-    labels->ShallowCopy(labelMap);
+    cementsph::scene::InjectionRunResult r = cementsph::scene::runInjection(ct, scene, o);
+    if (this->ProduceImageOutputs) this->FillImageOutputs(input, mask, ct, r, scene, simulated, labels);
     if (r.particles) points->ShallowCopy(r.particles);
     this->MetricsJSON = r.metrics.dump(2);
-    this->Summary = r.summary;
+    this->Result = std::move(r);
     this->UpdateProgress(1.0);
   } catch (const std::exception& e) {
     this->Error = std::current_exception();
     this->ErrorMessage = e.what();
     this->MetricsJSON.clear();
-    this->Summary.reset();
+    this->Result.reset();
     simulated->Initialize();
     labels->Initialize();
     points->Initialize();

@@ -20,6 +20,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <iterator>
+#include <string>
 
 #include <cmath>
 
@@ -298,4 +300,111 @@ TEST(SPHInjectionFilter, LabelMapIsTheEnginesCementLabelsFile) {
   }
   EXPECT_EQ(differ, 0u);
   EXPECT_GT(cement, 500u);
+}
+
+namespace {
+// The figures with the keys that time the machine, not the run, removed (the engines' own end in _wall_s).
+nlohmann::json withoutWallTimes(nlohmann::json m) {
+  for (const char* key : {"wall_time_s", "real_time_factor", "timing", "provenance"}) m.erase(key);
+  for (auto it = m.begin(); it != m.end();) {
+    const std::string& key = it.key();
+    const bool wall = key.size() > 7 && key.compare(key.size() - 7, 7, "_wall_s") == 0;
+    it = wall ? m.erase(it) : std::next(it);
+  }
+  return m;
+}
+} // namespace
+
+// The typed result (GetResult) is the run's, not a re-reading of its files. Oracle: the inject driver
+// (runInjection) run directly on the same CT (the scaffold's ITK image, not the filter's copy of it) with the
+// filter's own scene: every figure but the wall times, the outlet's series sample for sample and the region's
+// simulated CT voxel for voxel must be identical (the one driver on the same voxels: to the bit, no tolerance).
+TEST(SPHInjectionFilter, TheTypedResultIsTheDriversRunOnTheSameScene) {
+  const auto itk = cementsph::scene::testing::scaffold();
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(itk);
+  ProgressLog log;
+  auto filter = makeFilter(ct, log);
+  EXPECT_EQ(filter->GetResult(), nullptr); // before a run
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  const cementsph::scene::InjectionRunResult* viaFilter = filter->GetResult();
+  ASSERT_NE(viaFilter, nullptr);
+  EXPECT_EQ(filter->GetSummary(), &viaFilter->summary);
+  const cementsph::scene::InjectionRunResult direct = cementsph::scene::runInjection(itk, filter->GetScene(), {});
+  EXPECT_EQ(withoutWallTimes(viaFilter->summary.toJson()), withoutWallTimes(direct.summary.toJson()));
+  EXPECT_EQ(withoutWallTimes(viaFilter->metrics), withoutWallTimes(direct.metrics));
+  EXPECT_EQ(withoutWallTimes(nlohmann::json::parse(filter->GetMetricsJSON())), withoutWallTimes(direct.metrics));
+  ASSERT_EQ(viaFilter->tipSeries.size(), direct.tipSeries.size());
+  EXPECT_GT(direct.tipSeries.size(), 10u);
+  for (std::size_t i = 0; i < direct.tipSeries.size(); ++i) {
+    EXPECT_EQ(viaFilter->tipSeries[i].time, direct.tipSeries[i].time) << "sample " << i;
+    EXPECT_EQ(viaFilter->tipSeries[i].tipPa, direct.tipSeries[i].tipPa) << "sample " << i;
+    EXPECT_EQ(viaFilter->tipSeries[i].cannulaPa, direct.tipSeries[i].cannulaPa) << "sample " << i;
+  }
+  ASSERT_TRUE(viaFilter->simulatedCt && direct.simulatedCt);
+  ASSERT_EQ(viaFilter->simulatedCt->GetLargestPossibleRegion(), direct.simulatedCt->GetLargestPossibleRegion());
+  const std::size_t n = direct.simulatedCt->GetLargestPossibleRegion().GetNumberOfPixels();
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    differ += viaFilter->simulatedCt->GetBufferPointer()[i] != direct.simulatedCt->GetBufferPointer()[i];
+  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(viaFilter->particles->GetNumberOfPoints(), direct.particles->GetNumberOfPoints());
+  // A failed run leaves no result behind.
+  filter->SetTipMm(0.5, 0.5, 13); // in a rod
+  filter->Update();
+  EXPECT_NE(filter->GetErrorMessage(), "");
+  EXPECT_EQ(filter->GetResult(), nullptr);
+  EXPECT_EQ(filter->GetSummary(), nullptr);
+}
+
+// ProduceImageOutputs off (plan's evaluations): ports 0 and 1 stay empty, and the run is the same. Oracle: the
+// same filter's run with image outputs (itself checked against the driver above and against the CT's geometry
+// in the tests before): the same figures, series and cement points. Turning it back on reruns and fills them.
+TEST(SPHInjectionFilter, WithoutImageOutputsThePortsAreEmptyAndTheRunIsTheSame) {
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(cementsph::scene::testing::scaffold());
+  ProgressLog log;
+  auto withImages = makeFilter(ct, log);
+  withImages->Update();
+  ASSERT_EQ(withImages->GetErrorMessage(), "");
+  auto pointsOnly = makeFilter(ct, log);
+  EXPECT_TRUE(pointsOnly->GetProduceImageOutputs()); // on by default
+  pointsOnly->ProduceImageOutputsOff();
+  pointsOnly->Update();
+  ASSERT_EQ(pointsOnly->GetErrorMessage(), "");
+  EXPECT_EQ(pointsOnly->GetSimulatedCTOutput()->GetNumberOfPoints(), 0);
+  EXPECT_EQ(pointsOnly->GetLabelMapOutput()->GetNumberOfPoints(), 0);
+  const auto* a = withImages->GetResult();
+  const auto* b = pointsOnly->GetResult();
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(withoutWallTimes(b->metrics), withoutWallTimes(a->metrics));
+  ASSERT_EQ(b->tipSeries.size(), a->tipSeries.size());
+  for (std::size_t i = 0; i < a->tipSeries.size(); ++i) EXPECT_EQ(b->tipSeries[i].tipPa, a->tipSeries[i].tipPa) << i;
+  vtkPolyData* pa = withImages->GetCementPointsOutput();
+  vtkPolyData* pb = pointsOnly->GetCementPointsOutput();
+  ASSERT_EQ(pb->GetNumberOfPoints(), pa->GetNumberOfPoints());
+  EXPECT_GT(pb->GetNumberOfPoints(), 0);
+  for (vtkIdType i = 0; i < pa->GetNumberOfPoints(); ++i)
+    for (int axis = 0; axis < 3; ++axis) ASSERT_EQ(pb->GetPoint(i)[axis], pa->GetPoint(i)[axis]) << "point " << i;
+  pointsOnly->ProduceImageOutputsOn();
+  pointsOnly->Update();
+  EXPECT_EQ(pointsOnly->GetSimulatedCTOutput()->GetNumberOfPoints(), ct->GetNumberOfPoints());
+  EXPECT_EQ(pointsOnly->GetLabelMapOutput()->GetNumberOfPoints(), ct->GetNumberOfPoints());
+}
+
+// The filter keeps its copy of the input between runs (a plan's dozens of runs on one CT) only while the input is
+// unchanged: after the input's voxels change (and say so, Modified), the run sees the new CT. Oracle: the
+// scaffold's geometry; the pore at the tip filled with 1000 HU is solid, and a tip in solid is refused.
+TEST(SPHInjectionFilter, AChangedInputIsCopiedAgain) {
+  vtkSmartPointer<vtkImageData> ct = cementsph::imaging::toVtk(cementsph::scene::testing::scaffold());
+  ProgressLog log;
+  auto filter = makeFilter(ct, log);
+  filter->ProduceImageOutputsOff();
+  filter->Update();
+  ASSERT_EQ(filter->GetErrorMessage(), "");
+  for (int k = 24; k <= 28; ++k)
+    for (int j = 24; j <= 28; ++j)
+      for (int i = 24; i <= 28; ++i) ct->SetScalarComponentFromDouble(i, j, k, 0, 1000.0); // around the tip
+  ct->Modified();
+  filter->Update();
+  EXPECT_NE(filter->GetErrorMessage().find("lies in solid"), std::string::npos) << filter->GetErrorMessage();
 }

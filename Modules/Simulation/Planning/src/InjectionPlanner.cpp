@@ -3,11 +3,14 @@
 #include "cementsph/parallel/CaseFarm.h"
 #include "cementsph/planning/PlanTrajectory.h"
 #include "cementsph/scene/AxisAlignedCT.h"
+#include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/scene/InjectionRunner.h"
+#include "vtkSPHInjectionFilter.h"
 
 #include <nlopt.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 
 #include <algorithm>
 #include <cmath>
@@ -50,7 +53,7 @@ const char* stopText(nlopt_result r) {
 }
 
 struct Context {
-  const imaging::ImageType* ct;
+  vtkSPHInjectionFilter* injection; // the start's filter on the CT, without image outputs
   const PlanRequest* request;
   int start;
   std::vector<PlanEvaluation>* evaluations;
@@ -88,11 +91,14 @@ double evaluate(unsigned, const double* x, double*, void* data) {
       s.secondTipWithdrawalMm = e.depthMm - e.secondDepthMm;
       s.secondTipVolumeMl = e.secondVolumeMl;
     }
-    // The driver itself, not vtkSPHInjectionFilter (which runBestPlan and inject use): the filter's outputs are
-    // the simulated CT and label map pasted onto the whole input grid, a pass over every voxel of the scan per
-    // injection (tens of millions on a clinical CT) that an evaluation, which reads only the summary and the
-    // cement points, would pay for nothing. The same runInjection either way, so the same figures.
-    const scene::InjectionRunResult run = scene::runInjection(c->ct, s, {});
+    // Through vtkSPHInjectionFilter, as runBestPlan and inject run, but without its image outputs: the simulated
+    // CT and label map pasted onto the whole input grid are a pass over every voxel of the scan per injection
+    // (tens of millions on a clinical CT) that an evaluation, which reads only the summary and the cement
+    // points, would pay for nothing. The same runInjection underneath, so the driver's figures.
+    c->injection->SetScene(s);
+    c->injection->Update();
+    c->injection->RethrowIfFailed();
+    const scene::InjectionRunResult& run = *c->injection->GetResult();
     e.coverage = targetCoverage(run.particles, r.targetCentreMm, r.targetRadiusMm);
     e.syringeMpa = run.summary.maxInjectionPressurePa * 1e-6;
     e.leakageMl = run.summary.leakageVolumeMl;
@@ -122,7 +128,10 @@ std::pair<double, double> startPoint(const PlanRequest& r, int s) {
 // (the bytes a worker rank sends back; doubles read back to the same bits).
 nlohmann::json runStart(const imaging::ImageType* ct, const PlanRequest& r, int start) {
   std::vector<PlanEvaluation> evaluations;
-  Context context{ct, &r, start, &evaluations};
+  auto injection = vtkSmartPointer<vtkSPHInjectionFilter>::New();
+  injection->SetInputDataObject(0, imaging::toVtk(ct)); // copied once per start, not once per evaluation
+  injection->ProduceImageOutputsOff();
+  Context context{injection, &r, start, &evaluations};
   const unsigned n = unsigned(r.parameters());
   nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, n);
   // Depth and volume; with a second tip, its place t between the shallowest depth and the first tip, and

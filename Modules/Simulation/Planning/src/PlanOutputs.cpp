@@ -71,15 +71,10 @@ scene::InjectionRunResult runBestPlan(const imaging::ImageType* ct, const PlanRe
   filter->SetOutputDirectory(outDir.string());
   filter->Update();
   filter->RethrowIfFailed();
-  scene::InjectionRunResult run;
-  run.summary = *filter->GetSummary();
-  run.metrics = nlohmann::json::parse(filter->GetMetricsJSON());
-  run.particles = vtkSmartPointer<vtkPolyData>::New();
-  run.particles->DeepCopy(filter->GetCementPointsOutput());
+  // The typed result (summary, metrics, points, the anatomy labels), with the images the filter's outputs hold.
+  scene::InjectionRunResult run = *filter->GetResult();
   run.simulatedCtFile = imaging::imageFromVtk(filter->GetSimulatedCTOutput());
   run.cementLabelsFile = labelsAsMask(imaging::imageFromVtk(filter->GetLabelMapOutput()));
-  if (const auto anatomy = outDir / "anatomy_labels.nrrd"; std::filesystem::exists(anatomy))
-    run.anatomyLabelsFile = labelsAsMask(imaging::readVolume(anatomy.string()));
   return run;
 }
 

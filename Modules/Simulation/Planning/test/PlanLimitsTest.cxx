@@ -4,6 +4,8 @@
 // pressure and leak: with the edge warning it is 5 below planObjective, without it equal. A region of 12 mm
 // around the tip cannot hold 2 ml (12^3 mm^3 of bone at the phantom's porosity is under 1.7 ml), so the edge is
 // reached; PlanTest's plan (40 mm region) never reaches it.
+#include "VertebraPlanRequest.h"
+
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/phantom/VertebraPhantom.h"
 #include "cementsph/planning/InjectionPlanner.h"
@@ -20,16 +22,10 @@ namespace {
 using namespace cementsph;
 
 TEST(PlanLimits, CementAtTheRegionsEdgeIsAWarningAndAPlanLimit) {
-  const auto ct = imaging::readVolume(
-      (std::filesystem::path(CEMENTSPH_TEST_DATA_DIR) / "vertebra-phantom" / "pre.nrrd").string());
-  planning::PlanRequest r;
-  r.scene = scene::scenePreset("paper");
+  const auto ct = planning::testing::vertebraPhantomCt();
+  planning::PlanRequest r = planning::testing::transpedicularRequest();
   r.scene.roiSizeMm = 12;
-  r.entryMm = Eigen::Vector3d(48.5, 52.4, 22.5); // transpedicular (PlanTrajectoryTest)
-  r.targetCentreMm = Eigen::Vector3d(32, 21, 22.5);
-  r.direction = r.targetCentreMm - r.entryMm;
   r.minDepthMm = 25;
-  r.maxDepthMm = r.direction.norm();
   r.minVolumeMl = 1.5;
   r.maxVolumeMl = 2;
   r.maxLeakageMl = 1; // the leak limit out of the way: only the edge limits
@@ -64,13 +60,8 @@ TEST(PlanLimits, MarrowFatIsNotLeakageForTheLeakLimit) {
   o.marrowFatRadiusMm = 5;
   const phantom::VertebraResult v = phantom::makeVertebra(o);
   const Eigen::Vector3d fat(v.marrowFatCentreMm[0], v.marrowFatCentreMm[1], v.marrowFatCentreMm[2]);
-  planning::PlanRequest r;
-  r.scene = scene::scenePreset("paper");
-  r.entryMm = Eigen::Vector3d(48.5, 52.4, 22.5); // transpedicular (PlanTrajectoryTest): clear of the canal
-  r.targetCentreMm = fat;
-  r.direction = r.targetCentreMm - r.entryMm;
+  planning::PlanRequest r = planning::testing::transpedicularRequest(fat); // clear of the canal
   r.minDepthMm = 20;
-  r.maxDepthMm = r.direction.norm();
   r.targetRadiusMm = 5;
   r.minVolumeMl = 1;
   r.maxVolumeMl = 2;
@@ -97,13 +88,8 @@ TEST(PlanLimits, MarrowFatIsNotLeakageForTheLeakLimit) {
 // images as the driver run directly (the oracle: runInjection with the same scene, files on the input grid),
 // to the bit, since both are the one driver on the same CT.
 TEST(PlanLimits, TheBestRunThroughTheFilterEqualsTheDriversRun) {
-  const auto ct = imaging::readVolume(
-      (std::filesystem::path(CEMENTSPH_TEST_DATA_DIR) / "vertebra-phantom" / "pre.nrrd").string());
-  planning::PlanRequest r;
-  r.scene = scene::scenePreset("paper");
-  r.entryMm = Eigen::Vector3d(48.5, 52.4, 22.5);
-  r.targetCentreMm = Eigen::Vector3d(32, 21, 22.5);
-  r.direction = r.targetCentreMm - r.entryMm;
+  const auto ct = planning::testing::vertebraPhantomCt();
+  const planning::PlanRequest r = planning::testing::transpedicularRequest();
   planning::PlanResult plan;
   plan.best.depthMm = 30;
   plan.best.tipMm = r.entryMm + 30 * r.direction.normalized();

@@ -28,11 +28,17 @@ struct TipPressurePlotOptions {
 // and the axis labels stay short). Errors as readTipPressureCsv() and writePlotPng().
 void writeTipPressurePlot(const std::filesystem::path& csv, const std::filesystem::path& png,
                           const TipPressurePlotOptions& options = {});
+// The same from a series in memory (a run's own, so nothing re-reads the CSV it wrote); errors as writePlotPng().
+void writeTipPressurePlot(const TipPressureSeries& series, const std::filesystem::path& png,
+                          const TipPressurePlotOptions& options = {});
 
 // The pressures a planner reads over time, in kPa: at the syringe (injection_pressure_pa), the cannula's
 // drop and at the outlet (Fig. 10's curve). The CSV must have the two extra columns (std::runtime_error
 // otherwise, naming the file).
 void writeInjectionPressurePlot(const std::filesystem::path& csv, const std::filesystem::path& png,
+                                const TipPressurePlotOptions& options = {});
+// The same from a series in memory; std::runtime_error when it has no cannula and injection pressures.
+void writeInjectionPressurePlot(const TipPressureSeries& series, const std::filesystem::path& png,
                                 const TipPressurePlotOptions& options = {});
 
 } // namespace cementsph::rendering

@@ -1,7 +1,7 @@
 // `cementsph plan` (issue "Planning at scale", item 1): where along a trajectory to put the cannula's tip and
 // how much cement to inject so that a target region is covered within the syringe-pressure and leakage
-// limits. Each evaluation is a full injection (runInjection: the default voxel-grid Darcy model, continuum
-// bone on a clinical CT); the optimiser is NLopt's BOBYQA (Powell 2009, a derivative-free trust-region
+// limits. Each evaluation is a full injection (vtkSPHInjectionFilter without its image outputs, over the one
+// driver runInjection: the default voxel-grid Darcy model, continuum bone on a clinical CT); the optimiser is NLopt's BOBYQA (Powell 2009, a derivative-free trust-region
 // method on quadratic models, with bounds), chosen because an injection has no gradient and costs a
 // fraction of a second to seconds.
 //
