@@ -203,6 +203,7 @@ public:
     closed_.assign(g.count(), 0);
     for (std::size_t c = 0; c < g.count(); ++c) closed_[c] = solid_->solid[c];
     closeShaft();
+    padClosed();
     sourceRadius_ = std::max(0.5 * innerDiameter_, d_);
     particleRadius_ = std::cbrt(3.0 / (4 * kPi)) * d_;
     effectiveRadius_ = effectiveOutletRadius(sourceRadius_, particleRadius_);
@@ -446,23 +447,16 @@ private:
     if (closedColour_.empty()) closedColour_.assign(solid_->grid.count(), -1.0f);
     if (closedColour_[v] >= 0.0f) return closedColour_[v];
     const sph::VoxelGrid& g = solid_->grid;
-    const double cs = kernel_.support, vc = g.voxelVolume();
-    int m[3];
-    for (int a = 0; a < 3; ++a) m[a] = int(std::floor(cs / g.spacing[a]));
     const int i = int(v % std::size_t(g.size[0])), j = int((v / std::size_t(g.size[0])) % std::size_t(g.size[1]));
     const int k = int(v / (std::size_t(g.size[0]) * std::size_t(g.size[1])));
+    const std::uint8_t* centre = closedPad_.data() + paddedIndex(i, j, k);
     double c = 0;
-    for (int dk = -m[2]; dk <= m[2]; ++dk)
-      for (int dj = -m[1]; dj <= m[1]; ++dj)
-        for (int di = -m[0]; di <= m[0]; ++di) {
-          const int x = i + di, y = j + dj, z = k + dk;
-          const bool inside = x >= 0 && y >= 0 && z >= 0 && x < g.size[0] && y < g.size[1] && z < g.size[2];
-          if (inside && !closed_[g.index(x, y, z)]) continue;
-          const double r2 = Eigen::Vector3d(di * g.spacing[0], dj * g.spacing[1], dk * g.spacing[2]).squaredNorm();
-          if (r2 < cs * cs) c += vc * kernel_.w(std::sqrt(r2));
-        }
+    for (const StencilEntry& e : stencil_)
+      if (centre[e.offset]) c += e.weight;
+    // Stored as a float and returned as stored: the first call's answer is every later call's (it used to
+    // return the unrounded sum once, so a voxel's share depended on whether it had been asked before).
     closedColour_[v] = float(c);
-    return c;
+    return closedColour_[v];
   }
   // The open share of a kernel support, 1 - (closed share), bounded below so that a voxel walled in on almost
   // every side still has a finite indicator.
@@ -487,24 +481,75 @@ private:
   // written are listed in touched (and only those of the previous call are reset).
   void particleColour(std::vector<float>& colour, std::vector<std::size_t>& touched) const {
     const sph::VoxelGrid& g = solid_->grid;
-    const double cs = kernel_.support;
+    const double cs = kernel_.support, cs2 = cs * cs;
     colour.resize(g.count(), 0.0f);
     for (std::size_t v : touched) colour[v] = 0.0f;
     touched.clear();
     for (const auto& p : x_) {
       int lo[3], hi[3];
       voxelBox(p, cs, lo, hi);
-      for (int k = lo[2]; k <= hi[2]; ++k)
-        for (int j = lo[1]; j <= hi[1]; ++j)
-          for (int i = lo[0]; i <= hi[0]; ++i) {
-            const std::size_t v = g.index(i, j, k);
+      for (int k = lo[2]; k <= hi[2]; ++k) {
+        const double rz = (g.origin[2] + g.spacing[2] * k) - p[2], rz2 = rz * rz;
+        for (int j = lo[1]; j <= hi[1]; ++j) {
+          const double ry = (g.origin[1] + g.spacing[1] * j) - p[1], ry2 = ry * ry;
+          int i0, i1;
+          if (!rowRange(p[0], ry2, rz2, lo[0], hi[0], i0, i1)) continue;
+          const std::size_t row = g.index(0, j, k);
+          for (int i = i0; i <= i1; ++i) {
+            const std::size_t v = row + std::size_t(i);
             if (closed_[v]) continue;
-            if (const double r2 = (g.centre(i, j, k) - p).squaredNorm(); r2 < cs * cs) {
+            const double rx = (g.origin[0] + g.spacing[0] * i) - p[0];
+            if (const double r2 = rx * rx + ry2 + rz2; r2 < cs2) {
               if (colour[v] == 0.0f) touched.push_back(v);
               colour[v] += float(volume_ * kernel_.w(std::sqrt(r2)));
             }
           }
+        }
+      }
     }
+  }
+
+  // The voxels of row (j, k) whose centres may lie within the kernel support of a point at x = px, given the
+  // row's squared offsets ry2, rz2: the sphere's chord, widened by one voxel each way against rounding and
+  // clipped to lo..hi (the callers keep their own r^2 < support^2 test, so the set visited is the box's).
+  // False for a row the sphere misses: (rx^2 + ry^2) + rz^2 >= ry^2 + rz^2 in floating point too.
+  bool rowRange(double px, double ry2, double rz2, int lo, int hi, int& i0, int& i1) const {
+    const sph::VoxelGrid& g = solid_->grid;
+    const double rest = kernel_.support * kernel_.support - (ry2 + rz2);
+    if (!(rest > 0)) return false;
+    const double half = std::sqrt(rest);
+    i0 = std::max(lo, int(std::ceil((px - half - g.origin[0]) / g.spacing[0])) - 1);
+    i1 = std::min(hi, int(std::floor((px + half - g.origin[0]) / g.spacing[0])) + 1);
+    return i0 <= i1;
+  }
+
+  // The closed set padded by a kernel support on every side with closed voxels (the space outside the region
+  // counts as closed), so the loops over a support need no bounds test; and the stencil of a voxel centre's
+  // support (offsets within it, in the padded grid, with V_c W(r)) for closedColourAt.
+  void padClosed() {
+    const sph::VoxelGrid& g = solid_->grid;
+    const double cs = kernel_.support, vc = g.voxelVolume();
+    pad_ = 0;
+    for (int a = 0; a < 3; ++a) pad_ = std::max(pad_, int(std::ceil(cs / g.spacing[a])) + 2);
+    for (int a = 0; a < 3; ++a) padSize_[a] = g.size[a] + 2 * pad_;
+    closedPad_.assign(std::size_t(padSize_[0]) * std::size_t(padSize_[1]) * std::size_t(padSize_[2]), 1);
+    for (int k = 0; k < g.size[2]; ++k)
+      for (int j = 0; j < g.size[1]; ++j)
+        for (int i = 0; i < g.size[0]; ++i) closedPad_[paddedIndex(i, j, k)] = closed_[g.index(i, j, k)];
+    int m[3];
+    for (int a = 0; a < 3; ++a) m[a] = int(std::floor(cs / g.spacing[a]));
+    stencil_.clear();
+    for (int dk = -m[2]; dk <= m[2]; ++dk)
+      for (int dj = -m[1]; dj <= m[1]; ++dj)
+        for (int di = -m[0]; di <= m[0]; ++di) {
+          const double r2 = Eigen::Vector3d(di * g.spacing[0], dj * g.spacing[1], dk * g.spacing[2]).squaredNorm();
+          if (r2 < cs * cs)
+            stencil_.push_back({std::ptrdiff_t(di) + std::ptrdiff_t(padSize_[0]) * (std::ptrdiff_t(dj) + std::ptrdiff_t(padSize_[1]) * dk),
+                                vc * kernel_.w(std::sqrt(r2))});
+        }
+  }
+  std::size_t paddedIndex(int i, int j, int k) const {
+    return std::size_t(i + pad_) + std::size_t(padSize_[0]) * (std::size_t(j + pad_) + std::size_t(padSize_[1]) * std::size_t(k + pad_));
   }
 
   void add(const Eigen::Vector3d& p, double pressure, double viscosity) {
@@ -568,7 +613,11 @@ private:
     occupied_.resize(g.count(), 0);
     for (std::size_t v : touched_) occupied_[v] = 0;
     particleColour(colour_, touched_);
-    for (std::size_t v : touched_) occupied_[v] = !closed_[v] && cementShare(v) >= 0.5;
+    share_.resize(g.count(), 0.0);
+    for (std::size_t v : touched_) { // every open voxel in a particle's support is touched: its share kept for the ghosts
+      share_[v] = closed_[v] ? 0.0 : cementShare(v);
+      occupied_[v] = !closed_[v] && share_[v] >= 0.5;
+    }
     auto stamp = [&](const Eigen::Vector3d& p, double radius) {
       int lo[3], hi[3];
       voxelBox(p, radius, lo, hi);
@@ -597,42 +646,63 @@ private:
     }
     ghostPull_.assign(n, Eigen::Vector3d::Zero());
     frontParticles_ = 0;
+    const double cs2 = cs * cs, vcOverV = vc / volume_;
+    // Each particle's sums read only shared state (share_ holds every ghost's cement share, so closedColourAt's
+    // cache is not written here) and are its own, summed in the same order by whichever thread: the result
+    // does not depend on the thread count.
+#pragma omp parallel for schedule(dynamic, 16)
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Vector3d& p = x_[i];
       int lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = int(std::ceil((p[a] - cs - g.origin[a]) / g.spacing[a]));
-        hi[a] = int(std::floor((p[a] + cs - g.origin[a]) / g.spacing[a]));
+      for (int a = 0; a < 3; ++a) { // the support's box, within the padded closed set (particles lie in the region)
+        lo[a] = std::max(-pad_, int(std::ceil((p[a] - cs - g.origin[a]) / g.spacing[a])));
+        hi[a] = std::min(g.size[a] - 1 + pad_, int(std::floor((p[a] + cs - g.origin[a]) / g.spacing[a])));
       }
-      for (int k = lo[2]; k <= hi[2]; ++k)
-        for (int j = lo[1]; j <= hi[1]; ++j)
-          for (int ii = lo[0]; ii <= hi[0]; ++ii) {
-            const bool inside = ii >= 0 && j >= 0 && k >= 0 && ii < g.size[0] && j < g.size[1] && k < g.size[2];
-            const std::size_t v = inside ? g.index(ii, j, k) : 0;
-            if (inside && !closed_[v] && occupied_[v]) continue; // cement: the particles' own sums
-            const Eigen::Vector3d c = g.origin + g.spacing.cwiseProduct(Eigen::Vector3d(ii, j, k));
-            const Eigen::Vector3d r = c - p;
-            const double r2 = r.squaredNorm();
-            if (r2 >= cs * cs || r2 == 0) continue; // outside the support: no square root (most of the box)
+      double num = number[i], gF = 0;
+      Eigen::Vector3d gradC = Eigen::Vector3d::Zero(), gNormal = Eigen::Vector3d::Zero(), gPull = Eigen::Vector3d::Zero();
+      Eigen::Matrix3d gB = Eigen::Matrix3d::Zero();
+      const double ci = colourAt[i];
+      for (int k = lo[2]; k <= hi[2]; ++k) {
+        const double rz = (g.origin[2] + g.spacing[2] * k) - p[2], rz2 = rz * rz;
+        const bool zInside = k >= 0 && k < g.size[2];
+        for (int j = lo[1]; j <= hi[1]; ++j) {
+          const double ry = (g.origin[1] + g.spacing[1] * j) - p[1], ry2 = ry * ry;
+          int i0, i1;
+          if (!rowRange(p[0], ry2, rz2, lo[0], hi[0], i0, i1)) continue;
+          const bool rowInside = zInside && j >= 0 && j < g.size[1];
+          const std::uint8_t* closedRow = closedPad_.data() + paddedIndex(0, j, k);
+          const std::size_t row = rowInside ? g.index(0, j, k) : 0; // an open voxel lies in the region
+          for (int ii = i0; ii <= i1; ++ii) {
+            const bool closed = closedRow[ii] != 0;
+            const std::size_t v = row + std::size_t(ii);
+            if (!closed && occupied_[v]) continue; // cement: the particles' own sums
+            const double rx = (g.origin[0] + g.spacing[0] * ii) - p[0];
+            const double r2 = rx * rx + ry2 + rz2;
+            if (r2 >= cs2 || r2 == 0) continue; // outside the support: no square root
+            const Eigen::Vector3d r(rx, ry, rz);
             const double rn = std::sqrt(r2);
             const double f = kernel_.fOverR(rn);
-            if (!inside || closed_[v]) {
-              closedGradC_[i] += vc * f * r; // grad_i W toward the closed voxel: counted as occupied
-              number[i] += vc / volume_ * kernel_.w(rn);
-            } else if (!occupied_[v]) {
-              number[i] += vc / volume_ * kernel_.w(rn);
+            if (closed) {
+              gradC += vc * f * r; // grad_i W toward the closed voxel: counted as occupied
+              num += vcOverV * kernel_.w(rn);
+            } else {
+              num += vcOverV * kernel_.w(rn);
               // Ghost-fluid (Gibou et al. 2002): the surface C = 1/2 lies theta of the way from the particle
               // to the ghost (C linear between them); p = 0 there, so the ghost's value is p_i (1 - 1/theta).
-              const double cg = cementShare(v), ci = colourAt[i];
+              const double cg = share_[v];
               const double theta = ci > cg ? std::clamp((ci - 0.5) / (ci - cg), kMinTheta, 1.0) : 1.0;
-              ghostF_[i] += vc * f / theta;
-              ghostB_[i] += vc * f * r * r.transpose();
-              ghostNormal_[i] += vc * f * r;
-              ghostPull_[i] += vc * f / theta * r;
+              gF += vc * f / theta;
+              gB += vc * f * r * r.transpose();
+              gNormal += vc * f * r;
+              gPull += vc * f / theta * r;
             }
           }
-      if (ghostF_[i] > 0) ++frontParticles_;
+        }
+      }
+      number[i] = num, ghostF_[i] = gF, closedGradC_[i] = gradC, ghostB_[i] = gB, ghostNormal_[i] = gNormal, ghostPull_[i] = gPull;
     }
+    for (std::size_t i = 0; i < n; ++i)
+      if (ghostF_[i] > 0) ++frontParticles_;
     // Each particle's space volume from its number density completed by the closed and open space about it
     // (a lattice of spacing d: exactly d^3).
     omega_.resize(n);
@@ -870,7 +940,16 @@ private:
   std::optional<sph::ViscositySchedule> viscosity_;
   std::vector<std::uint8_t> closed_, occupied_;
   std::vector<float> colour_;
+  std::vector<double> share_; // cementShare of the touched voxels this step (0 on closed ones)
   mutable std::vector<float> closedColour_; // per voxel, -1 until asked for (closedColourAt)
+  // The closed set padded by pad_ closed voxels on every side (padClosed), and a voxel centre's support stencil.
+  struct StencilEntry {
+    std::ptrdiff_t offset; // in the padded grid
+    double weight;         // V_c W(r)
+  };
+  std::vector<std::uint8_t> closedPad_;
+  std::vector<StencilEntry> stencil_;
+  int pad_ = 0, padSize_[3] = {1, 1, 1};
   std::vector<std::size_t> touched_;
   std::size_t shaftVoxels_ = 0, steps_ = 0, frontParticles_ = 0;
   std::vector<Eigen::Vector3d> seeds_, candidates_;
