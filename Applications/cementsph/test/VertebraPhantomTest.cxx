@@ -8,7 +8,10 @@
 //  * the plan of its truth.json with the continuum bone model: an intact posterior wall leaks nothing, the
 //    3 mm basivertebral foramen leaks, and every leak site lies within 4 mm of the foramen (its opening and
 //    the canal behind it);
-//  * 4 ml is held (cement volume within 1 %).
+//  * 4 ml is held (cement volume within 1 %);
+//  * the suggested trajectory is transpedicular: its shaft, from the tip back to the field's edge, keeps the wall of
+//    an 11 G cannula (outer diameter 3.05 mm, the gauge table's) out of the canal (distance from the canal's axis,
+//    from truth.json's geometry, in the test).
 #include "ProgramRun.h"
 #include "cementsph/imaging/VolumeIO.h"
 
@@ -117,4 +120,20 @@ TEST(VertebraPhantom, AnIntactWallHoldsTheCementAndTheForamenLeaksAtItself) {
     EXPECT_LT(std::sqrt(dx * dx + dy * dy + dz * dz), 4.0) << site.dump();
   }
   EXPECT_NEAR(open.at("cement_volume_ml").get<double>(), 4.0, 0.04);
+}
+
+TEST(VertebraPhantom, TheSuggestedShaftPassesBesideTheCanalNotThroughIt) {
+  const nlohmann::json truth = readJson(kData / "truth.json");
+  const auto& plan = truth.at("injection");
+  const auto& v = truth.at("vertebra");
+  const double canalX = v["canal_centre_mm"][0], canalY = v["canal_centre_mm"][1], radius = v["canal_radius_mm"];
+  const double tipX = plan["tip_mm"][0], tipY = plan["tip_mm"][1];
+  const double dx = plan["direction"][0], dy = plan["direction"][1];
+  const double fieldY = v["field_mm"][1];
+  double closest = 1e9;
+  for (double t = 0; tipY - t * dy <= fieldY; t += 0.25) // the shaft runs back from the tip, against the direction
+    closest = std::min(closest, std::hypot(tipX - t * dx - canalX, tipY - t * dy - canalY));
+  std::cout << "shaft's closest approach to the canal's axis " << closest << " mm (canal radius " << radius << " mm)\n";
+  const double cannulaOuterRadiusMm = 0.5 * 3.048; // 11 G
+  EXPECT_GT(closest, radius + cannulaOuterRadiusMm);
 }

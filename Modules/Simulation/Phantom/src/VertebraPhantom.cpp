@@ -69,11 +69,12 @@ VertebraResult makeVertebra(const VertebraOptions& o) {
   r.foramenMm = {cx, cy + kB - 0.5 * kCortex, cz};
   // Transpedicular: from posterior-left through the pedicle, the tip 3 mm left of and 9 mm behind the body's
   // centre, 6 mm in front of the posterior wall: 4 ml then reaches the foramen (the demo's leak). The shaft runs
-  // back from the tip through the middle of the left pedicle, the arch's wall beside the canal's centre
-  // (cx + (kCanalRadius + kArchOuter) / 2, the canal's y): (7, 14) mm behind the tip, so it passes 2 mm lateral
-  // of the canal and never crosses it (the earlier (-0.3, -0.954) ran through the canal 8.7-16.2 mm behind the tip).
+  // back from the tip through the lateral part of the left pedicle: through the arch's wall beside the canal's
+  // centre, 0.5 mm inside its outer edge (cx + kArchOuter - 0.5, the canal's y), so that at its closest the shaft's
+  // axis is 1.8 mm outside the canal, more than an 11 G cannula's outer radius (1.52 mm). The earlier
+  // (-0.3, -0.954) ran through the canal 10-15 mm behind the tip.
   r.suggestedTipMm = {cx + 3.0, cy + 9.0, cz};
-  const double backX = 0.5 * (kCanalRadius + kArchOuter) - 3.0, backY = r.canalCentreMm[1] - r.suggestedTipMm[1];
+  const double backX = kArchOuter - 0.5 - 3.0, backY = r.canalCentreMm[1] - r.suggestedTipMm[1];
   const double length = std::hypot(backX, backY);
   r.suggestedDirection = {-backX / length, -backY / length, 0.0};
   r.bodySemiAxesMm = {kA, kB, kHalfHeight};
