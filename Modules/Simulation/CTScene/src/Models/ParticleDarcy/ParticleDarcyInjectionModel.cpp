@@ -204,6 +204,7 @@ public:
     for (std::size_t c = 0; c < g.count(); ++c) closed_[c] = solid_->solid[c];
     closeShaft();
     padClosed();
+    markSightChecks();
     sourceRadius_ = std::max(0.5 * innerDiameter_, d_);
     particleRadius_ = std::cbrt(3.0 / (4 * kPi)) * d_;
     effectiveRadius_ = effectiveOutletRadius(sourceRadius_, particleRadius_);
@@ -217,13 +218,14 @@ public:
         cannulaDrop_ = rheology::tubePressureDrop(*law_, cannulaLength_, flowRate_, innerDiameter_);
     }
     if (closedAt(tip_)) throw std::invalid_argument("scene: tip_mm lies in a closed voxel");
-    // The outlet ball's lattice sites (filled first, nearest the tip first) and gap candidates (d/2 lattice).
+    // The outlet ball's lattice sites (filled first, nearest the tip first) and gap candidates (d/2 lattice),
+    // those the tip sees: the ball does not reach through a strut or plate into the pore behind it.
     const int n = int(std::ceil(sourceRadius_ / d_));
     for (int i = -n; i <= n; ++i)
       for (int j = -n; j <= n; ++j)
         for (int k = -n; k <= n; ++k) {
           const Eigen::Vector3d p = tip_ + d_ * Eigen::Vector3d(i, j, k);
-          if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p)) seeds_.push_back(p);
+          if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p) && !lineOfSightBlocked(tip_, p)) seeds_.push_back(p);
         }
     std::stable_sort(seeds_.begin(), seeds_.end(), [this](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
       return (a - tip_).squaredNorm() < (b - tip_).squaredNorm();
@@ -232,7 +234,7 @@ public:
       for (int j = -2 * n; j <= 2 * n; ++j)
         for (int k = -2 * n; k <= 2 * n; ++k) {
           const Eigen::Vector3d p = tip_ + 0.5 * d_ * Eigen::Vector3d(i, j, k);
-          if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p)) candidates_.push_back(p);
+          if ((p - tip_).norm() <= sourceRadius_ && !closedAt(p) && !lineOfSightBlocked(tip_, p)) candidates_.push_back(p);
         }
     if (seeds_.empty()) throw std::invalid_argument("scene: the outlet ball holds no open lattice site");
     {
@@ -398,6 +400,7 @@ public:
     e["smoothing_length_mm"] = kernel_.h * 1e3;
     e["particle_volume_mm3"] = volume_ * 1e9;
     e["front_particles"] = frontParticles_;
+    e["pairs_hidden_behind_solid_per_step"] = steps_ ? double(hiddenPairs_) / double(steps_) : 0.0;
     e["geometry_wall_s"] = geometrySeconds_;
     e["cannula_shaft_voxels_closed"] = shaftVoxels_;
   }
@@ -552,6 +555,85 @@ private:
     return std::size_t(i + pad_) + std::size_t(padSize_[0]) * (std::size_t(j + pad_) + std::size_t(padSize_[1]) * std::size_t(k + pad_));
   }
 
+  // Line of sight across thin struts (issue 19): two particles on either side of a one-voxel strut are within
+  // a kernel support of each other, and so is an empty pore behind it. Without a test they would exchange
+  // flux through solid (the pair's Laplacian weight, the gradient's terms, a p = 0 ghost pulling the cement
+  // toward a wall it cannot cross). sightCheck_ marks the region voxels with a closed region voxel within a
+  // support plus a voxel's half diagonal (a segment shorter than the support, starting in such a voxel, can
+  // cross a closed one only then); elsewhere (a uniform medium, most of a pore) no segment is walked. The
+  // region's sides are not walls here: a segment between two points of the region stays inside it.
+  void markSightChecks() {
+    const sph::VoxelGrid& g = solid_->grid;
+    const double reach = kernel_.support + 0.5 * g.spacing.norm();
+    std::vector<std::uint8_t> a(closed_.begin(), closed_.end()), b(a.size());
+    if (shaftVoxels_ == 0 && std::find(a.begin(), a.end(), std::uint8_t(1)) == a.end()) {
+      sightCheck_.assign(a.size(), 0);
+      return;
+    }
+    for (int axis = 0; axis < 3; ++axis) { // separable box dilation, one axis at a time
+      const int m = int(std::ceil(reach / g.spacing[axis]));
+      const std::size_t stride = axis == 0 ? 1 : axis == 1 ? std::size_t(g.size[0]) : std::size_t(g.size[0]) * std::size_t(g.size[1]);
+      for (int k = 0; k < g.size[2]; ++k)
+        for (int j = 0; j < g.size[1]; ++j)
+          for (int i = 0; i < g.size[0]; ++i) {
+            const int at = axis == 0 ? i : axis == 1 ? j : k;
+            const std::size_t v = g.index(i, j, k);
+            std::uint8_t any = 0;
+            for (int o = std::max(0, at - m); o <= std::min(g.size[axis] - 1, at + m) && !any; ++o)
+              any = a[v + (std::ptrdiff_t(o) - at) * std::ptrdiff_t(stride)];
+            b[v] = any;
+          }
+      a.swap(b);
+    }
+    sightCheck_ = std::move(a);
+  }
+
+  // Whether the segment from a to b passes through a closed voxel (a 3D DDA walk, Amanatides & Woo 1987, over
+  // the voxels it crosses; the end points' own voxels are open by construction and not tested).
+  bool lineOfSightBlocked(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+    const sph::VoxelGrid& g = solid_->grid;
+    int cur[3], end[3], step[3];
+    double tMax[3], tDelta[3];
+    for (int k = 0; k < 3; ++k) {
+      // Voxel i spans [i - 1/2, i + 1/2] in grid units about its centre.
+      const double ua = (a[k] - g.origin[k]) / g.spacing[k] + 0.5, ub = (b[k] - g.origin[k]) / g.spacing[k] + 0.5;
+      cur[k] = int(std::floor(ua)), end[k] = int(std::floor(ub));
+      const double du = ub - ua;
+      step[k] = du > 0 ? 1 : du < 0 ? -1 : 0;
+      tDelta[k] = step[k] ? 1.0 / std::abs(du) : std::numeric_limits<double>::infinity();
+      tMax[k] = step[k] > 0 ? (cur[k] + 1 - ua) / du : step[k] < 0 ? (cur[k] - ua) / du : std::numeric_limits<double>::infinity();
+    }
+    int budget = std::abs(end[0] - cur[0]) + std::abs(end[1] - cur[1]) + std::abs(end[2] - cur[2]);
+    while (budget-- > 0) {
+      const int k = tMax[0] <= tMax[1] ? (tMax[0] <= tMax[2] ? 0 : 2) : (tMax[1] <= tMax[2] ? 1 : 2);
+      cur[k] += step[k];
+      tMax[k] += tDelta[k];
+      if (cur[0] == end[0] && cur[1] == end[1] && cur[2] == end[2]) return false;
+      if (closedPad_[paddedIndex(cur[0], cur[1], cur[2])]) return true;
+    }
+    return false;
+  }
+
+  // Moves the pairs whose segment crosses a closed voxel out of the flux's pair list (pairI_ ...) into
+  // hiddenI_ ...: they stay in the number density (space is space) and the shifting, not in the pressure
+  // matrix or the gradient.
+  void hidePairsBehindSolid() {
+    hiddenI_.clear(), hiddenJ_.clear(), hiddenF_.clear();
+    std::size_t kept = 0;
+    for (std::size_t q = 0; q < pairI_.size(); ++q) {
+      const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
+      const long home = voxel(x_[i]);
+      if (home >= 0 && sightCheck_[std::size_t(home)] && lineOfSightBlocked(x_[i], x_[j])) {
+        hiddenI_.push_back(pairI_[q]), hiddenJ_.push_back(pairJ_[q]), hiddenF_.push_back(pairF_[q]);
+        continue;
+      }
+      pairI_[kept] = pairI_[q], pairJ_[kept] = pairJ_[q], pairF_[kept] = pairF_[q], pairW_[kept] = pairW_[q];
+      ++kept;
+    }
+    pairI_.resize(kept), pairJ_.resize(kept), pairF_.resize(kept), pairW_.resize(kept);
+    hiddenPairs_ += hiddenI_.size();
+  }
+
   void add(const Eigen::Vector3d& p, double pressure, double viscosity) {
     x_.push_back(p);
     mu_.push_back(viscosity);
@@ -662,6 +744,8 @@ private:
       Eigen::Vector3d gradC = Eigen::Vector3d::Zero(), gNormal = Eigen::Vector3d::Zero(), gPull = Eigen::Vector3d::Zero();
       Eigen::Matrix3d gB = Eigen::Matrix3d::Zero();
       const double ci = colourAt[i];
+      const long home = voxel(p);
+      const bool checkSight = home >= 0 && sightCheck_[std::size_t(home)];
       for (int k = lo[2]; k <= hi[2]; ++k) {
         const double rz = (g.origin[2] + g.spacing[2] * k) - p[2], rz2 = rz * rz;
         const bool zInside = k >= 0 && k < g.size[2];
@@ -687,6 +771,9 @@ private:
               num += vcOverV * kernel_.w(rn);
             } else {
               num += vcOverV * kernel_.w(rn);
+              // An empty pore behind solid is space (it counts in the number density) but no ghost: no
+              // pressure coupling crosses a closed voxel (lineOfSightBlocked).
+              if (checkSight && lineOfSightBlocked(p, Eigen::Vector3d(rx, ry, rz) + p)) continue;
               // Ghost-fluid (Gibou et al. 2002): the surface C = 1/2 lies theta of the way from the particle
               // to the ghost (C linear between them); p = 0 there, so the ghost's value is p_i (1 - 1/theta).
               const double cg = share_[v];
@@ -703,6 +790,7 @@ private:
     }
     for (std::size_t i = 0; i < n; ++i)
       if (ghostF_[i] > 0) ++frontParticles_;
+    hidePairsBehindSolid();
     // Each particle's space volume from its number density completed by the closed and open space about it
     // (a lattice of spacing d: exactly d^3).
     omega_.resize(n);
@@ -867,6 +955,15 @@ private:
       const double w = pairF_[q] * (1 + 0.2 * ratio * ratio * ratio * ratio);
       gradC[i] += omega_[j] * w * r, gradC[j] -= omega_[i] * w * r;
     }
+    // A neighbour behind a thin strut occupies space as the strut does (the closed voxels count as occupied
+    // here too): the shifting keeps it, so the strut's two sides pack alike; only the flux ignores it.
+    for (std::size_t q = 0; q < hiddenI_.size(); ++q) {
+      const std::size_t i = std::size_t(hiddenI_[q]), j = std::size_t(hiddenJ_[q]);
+      const Eigen::Vector3d r = x_[j] - x_[i];
+      const double ratio = kernel_.w(r.norm()) / wd;
+      const double w = hiddenF_[q] * (1 + 0.2 * ratio * ratio * ratio * ratio);
+      gradC[i] += omega_[j] * w * r, gradC[j] -= omega_[i] * w * r;
+    }
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Vector3d shift = -kShiftA * kernel_.h * u_[i].norm() * dt * gradC[i];
       if (ghostF_[i] > 0 && ghostNormal_[i].norm() > 0) {
@@ -963,7 +1060,10 @@ private:
   bool shearThinning_ = false;
   double referenceViscosity_ = 0, cannulaDrop_ = 0;
   // Geometry of the step.
-  std::vector<int> pairI_, pairJ_;
+  std::vector<int> pairI_, pairJ_, hiddenI_, hiddenJ_; // pairs in sight, and behind solid (hidePairsBehindSolid)
+  std::vector<double> hiddenF_;
+  std::vector<std::uint8_t> sightCheck_; // per region voxel: a closed voxel within a support (markSightChecks)
+  std::size_t hiddenPairs_ = 0;          // pair-steps hidden, summed over the run
   std::vector<double> pairF_, pairW_, ghostF_, omega_, pairA_, diagA_;
   std::vector<Eigen::Matrix3d> ghostB_;
   std::vector<Eigen::Vector3d> ghostNormal_, ghostPull_, closedGradC_;
