@@ -47,9 +47,27 @@
 //    at 0.025 N/m, so a user sees whether it could matter.
 //  * What drives leakage here (leak_risk in metrics.json; measured on the vertebra phantom with a vein,
 //    VALIDATION.md): with capillary entry, higher viscosity and curing raise Ca and cut the share of the cement
-//    that takes the low-entry leak path; volume raises leakage (the front reaches the path). A higher flow rate
-//    raises the viscous pressure too, so here it also cuts leakage: the opposite of the clinical finding, which
-//    this model cannot give (no cortex fracture, no pressure-dependent vein opening). Said, not hidden.
+//    that takes the low-entry leak path; volume raises leakage (the front reaches the path).
+//  * The flow rate (clinically, faster injection leaks more). Mu and Q enter an incompressible Darcy filling
+//    only as their product in the pressure, so any mechanism keyed to the pressure (capillary entry, a vein
+//    that opens above the venous pressure, a cortex that breaks above a stress) moves leakage the same way
+//    with viscosity and with flow rate: it cannot give "falls with viscosity, rises with flow rate". Two
+//    things separate them: time (curing: a slower injection's cement is older when the front reaches a vein)
+//    and a rate-dependent law (shear-thinning). Measured on the vertebra phantom with a vein (capillary on,
+//    3 ml, 0.0125-0.1 ml/s): curing (cmw1-37c, palacos-r-37c, palacos-r-25c) gave the clinical direction
+//    only at the slowest rates and reversed above (Ca ~ Q exp(t_inj / tau): it falls with Q only while the
+//    injection outlasts the curing time constant), so it is not the mechanism. Shear-thinning is: the
+//    Darcy-scale shear rate is highest where the flux is (the open vein), and a faster injection thins the
+//    cement there more, so a larger share takes the open path (Sochi 2010, J Polym Sci B 48:2437, reviews the
+//    preferential flow of shear-thinning fluids into high-permeability paths; PMMA cements are shear-thinning:
+//    Trivedi et al. 2023, Biomech Model Mechanobiol 22:1253, doi:10.1007/s10237-023-01715-4, and
+//    arXiv:2312.11426). With a Carreau cement, single phase, leakage rises with Q from the Newtonian leak (Q ->
+//    0) to the power law's (Q -> infinity; a power law is scale free and does not see Q) and does not depend on
+//    mu0; with capillary entry the two effects compete and the shear-thinning wins above Ca ~ 500
+//    (kShearThinningCrossoverCa; LeakFlowRateTest): a viscous shear-thinning cement then leaks more when faster
+//    or larger and less when thicker, all four as clinically. A Newtonian cement keeps the reversed flow-rate
+//    direction, and leak_risk's drivers say which case a run is in. Not modelled: cortex fracture and
+//    pressure-opened veins (they see mu Q, see above).
 #include "cementsph/scene/InjectionModel.h"
 
 #include "cementsph/anatomy/LeakSites.h"
@@ -91,6 +109,11 @@ using voxeldarcy::VoxelDarcyFilling;
 using voxeldarcy::VoxelMedium;
 
 namespace {
+
+// The capillary number above which a shear-thinning (Carreau) cement's leakage rises with the flow rate despite
+// the capillary steering (LeakFlowRateTest: on the vertebra phantom with a vein, n 0.3, lambda 1 s, it fell with
+// the flow rate at Ca 70-190, had its minimum within Ca 180-470 and rose at Ca 530-1410).
+constexpr double kShearThinningCrossoverCa = 500.0;
 
 // The cannula's wall thickness [m] where the scene gives none: 11G regular wall, outer 3.048 mm against
 // inner 2.388 mm (ISO 9626).
@@ -605,14 +628,35 @@ private:
         filling.injectedVolume() > 0 ? s.leakageVolumeMl * 1e-6 / filling.injectedVolume() : 0.0;
     if (ca) risk["capillary_number"] = *ca;
     // Which way each clinical driver moves the leak in this model (measured on the vertebra phantom with a vein,
-    // VALIDATION.md); Ca is proportional to viscosity x flow rate / tension.
+    // VALIDATION.md; LeakFlowRateTest, CapillaryLeakTest); Ca is proportional to viscosity x flow rate / tension.
+    // The flow rate acts two ways: through Ca (capillary entry: a faster injection steers less toward low-entry
+    // paths, less leakage) and through shear-thinning (Carreau: a faster injection thins the cement more in the
+    // high-flux open paths, more leakage). Above the crossover (Ca ~ 500 measured on the phantom, n 0.3,
+    // lambda 1 s) the second wins.
+    const bool carreau = scene.viscosityLaw == "carreau";
     const char* none = "none: single-phase Darcy, the flow split does not depend on it";
+    const char* thinning = "higher raises leakage (a shear-thinning cement thins most in the open, high-flux leak "
+                           "paths and a faster injection thins it more), as clinically";
+    std::string flowRate;
+    if (!on) {
+      flowRate = carreau ? thinning
+                         : scene.viscosityLaw == "power-law"
+                               ? "none: a power law is scale free, the flow split does not depend on the flow rate"
+                               : none;
+    } else if (carreau && ca && *ca >= kShearThinningCrossoverCa) {
+      flowRate = std::string(thinning) + "; here it outweighs the capillary steering (Ca above ~" +
+                 std::to_string(int(kShearThinningCrossoverCa)) + ")";
+    } else {
+      flowRate = carreau ? "two opposite effects: shear-thinning raises leakage with the flow rate, the capillary "
+                           "steering (Ca below ~500) cuts it and wins at low Ca; a more viscous cement gives the "
+                           "clinical direction"
+                         : "higher cuts leakage here (raises Ca): opposite to the clinical finding; a shear-thinning "
+                           "(viscosity_law carreau) viscous cement (Ca above ~500) gives the clinical direction";
+    }
     risk["drivers"] = {
         {"viscosity", on ? "higher cuts leakage (raises Ca), as clinically" : none},
         {"curing", on ? "later or faster curing cuts leakage (raises the viscosity, so Ca), as clinically" : none},
-        {"flow_rate", on ? "higher cuts leakage here (raises Ca): opposite to the clinical finding, which needs a "
-                           "mechanism this model lacks (cortex fracture, pressure-opened veins)"
-                         : none},
+        {"flow_rate", flowRate},
         {"volume", "larger raises leakage (the front reaches the leak paths), as clinically"}};
     e["leak_risk"] = risk;
   }
