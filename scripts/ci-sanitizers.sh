@@ -1,33 +1,48 @@
 #!/usr/bin/env bash
-# CI sanitizer stage (issues 21 item 6, 24 item 4): clang with AddressSanitizer + UndefinedBehaviorSanitizer
-# (-O1 -g, any UB report fatal), in its own build folder, for
-#   1. the libFuzzer targets in Testing/Fuzz/targets (nrrd_header, metaimage_header, nifti_header: our
-#      header checks that run before ITK; scene_json: the scene file parser), each run for FUZZ_SECONDS on
-#      its seed corpus Testing/Fuzz/corpus/<target> (new inputs go to a temporary folder, never the tree);
-#   2. the suites of the plain C++ modules (Rheology, SPH, VoxelDarcy, Scene), which need neither VTK nor ITK.
-# The suites that link VTK/ITK are not built here by default: a cold ASan build of the whole tree does not fit
-# CI's time on a 2-core machine (measured 2026-12-03: over 29 min of compiling for the libraries and 10 of the
-# unit label's 31 suites, GCC 12, Debug -O1). With SANITIZE_UNIT_LABEL=1 it also runs
-#   3. the whole suite's `unit` label (every module's unit suites, the VTK and ITK ones and the command suites
-#      that run the cementsph program included) as a Debug build of the CMake tree with GCC at -O1, ASan +
-#      UBSan, in $SANITIZE_CMAKE_DIR (GCC: Debian's ITK 5.2 headers refuse clang, itk_compiler_detection.h).
-#      Only the targets those tests run are built; with a warm ccache that is mostly linking. VTK, ITK, GDCM and
-#      the GL libraries are Debian's, not instrumented: LeakSanitizer reports from inside them may be suppressed
-#      in scripts/lsan-suppressions.txt, which says why for each line and never names our code. Fails (exit 1) on any build error, fuzzer finding (crash, UB, leak, timeout,
-# out-of-memory) or failed test; a fuzzer's reproducer is left in $SANITIZE_BUILD_DIR/findings/.
-# Sources are compiled directly (a generated Makefile, incremental), under the shared build lock.
+# CI sanitizer stage (issues 21 item 6, 24 item 4): AddressSanitizer + UndefinedBehaviorSanitizer (any UB report
+# fatal), run by .ci/run after the tests:
+#   1. clang -O1 -g, in $SANITIZE_BUILD_DIR: the libFuzzer targets in Testing/Fuzz/targets (nrrd_header,
+#      metaimage_header, nifti_header: our header checks that run before ITK; scene_json: the scene file parser),
+#      each run for FUZZ_SECONDS on its seed corpus Testing/Fuzz/corpus/<target> (new inputs go to a temporary
+#      folder, never the tree), two at a time;
+#   2. the same clang build of the suites of the plain C++ modules (Rheology, SPH, VoxelDarcy, Scene: the unit
+#      ones and the voxel filling's validation suite), which need neither VTK nor ITK;
+#   3. (SANITIZE_UNIT_LABEL=1, the default) every other suite of the whole tree's `unit` label (the VTK and ITK
+#      ones, and the command suites with the cementsph program they run) as a Debug -O1 -g build of the CMake
+#      tree with GCC, in $SANITIZE_CMAKE_DIR (GCC: Debian's ITK 5.2 headers refuse clang,
+#      itk_compiler_detection.h), run by ctest -L unit, JOBS at a time. Only those suites' targets are built; the
+#      ones of step 2 are not built twice. VTK, ITK, GDCM and the GL libraries are Debian's, not instrumented:
+#      scripts/lsan-suppressions.txt (leaks inside them) and scripts/ubsan-suppressions.txt (UB reports inside
+#      ITK's headers; this build makes UBSan recoverable so that the runtime reads them, and halt_on_error=1
+#      keeps every other report fatal) say why for each rule and never name our code.
+# Measured on the shared 2-core machine, 2026-12-03 (GCC 12, clang 14, ccache 4.7), at load 1.5-3.7 from other
+# builds: step 1 with FUZZ_SECONDS=45 and step 2 took 188-200 s with a warm cache in CI runs (75 s of it the clang
+# build); a cold GCC build of step 3 took 26 min for its libraries and 3 of its 24 suites, then about 2.5 min per
+# suite (the suites' own sources and links) under the shared build lock; its 24 suites' tests: see README/docs.
+# A warm ccache makes step 3's build mostly linking. ccache is keyed by paths relative to the source root
+# (CCACHE_BASEDIR), so a clone at another path hits: checked with two clones, /tmp/h3-clone then /tmp/h3-clone2,
+# 45 of 45 clang compiles hit in the second. Compiles whose command line or preprocessed source holds an absolute
+# path (the suites that use CEMENTSPH_TEST_DATA_DIR or CEMENTSPH_BINARY_DIR, cementsph-all's CEMENTSPH_DATA_DIR)
+# miss in a clone at a new path.
+# CI_DEADLINE (seconds since the epoch, set by .ci/run to 85 min after CI starts, short of its 90 min hard limit):
+# if step 3's build would run past it (a cold ccache), the stage stops with a line saying so, and fails; what was
+# compiled stays cached, so the next run continues from there.
+# Fails (exit 1) on any build error, fuzzer finding (crash, UB, leak, timeout, out-of-memory) or failed test; a
+# fuzzer's reproducer is left in $SANITIZE_BUILD_DIR/findings/.
+# The clang sources are compiled directly (a generated Makefile, incremental), under the shared build lock.
 # The fuzzers start from a fixed seed (FUZZ_SEED, default 1) so that a CI run is reproducible: the same code
 # explores the same inputs, a slower machine a prefix of them. Exploratory runs that look for new findings use
 # FUZZ_SEED=0 (libFuzzer picks one) and a longer FUZZ_SECONDS; what they find goes into the seed corpus.
-# Environment: SANITIZE_BUILD_DIR (default ./build-sanitize), SANITIZE_UNIT_LABEL (default 0),
-# SANITIZE_CMAKE_DIR (default ./build-asan), FUZZ_SECONDS (default 45), FUZZ_SEED (default 1), JOBS (default nproc),
-# CEMENTSPH_BUILD_LOCK (default /tmp/cementsph-build.lock; do not call this script under that lock).
+# Environment: SANITIZE_BUILD_DIR (default ./build-sanitize), SANITIZE_UNIT_LABEL (default 1),
+# SANITIZE_CMAKE_DIR (default ./build-asan), FUZZ_SECONDS (default 30), FUZZ_SEED (default 1), JOBS (default nproc),
+# CI_DEADLINE (default none), CEMENTSPH_BUILD_LOCK (default /tmp/cementsph-build.lock; do not call this script
+# under that lock).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 out="${SANITIZE_BUILD_DIR:-$here/build-sanitize}"
 cmake_out="${SANITIZE_CMAKE_DIR:-$here/build-asan}"
-unit_label="${SANITIZE_UNIT_LABEL:-0}"
-seconds="${FUZZ_SECONDS:-45}"
+unit_label="${SANITIZE_UNIT_LABEL:-1}"
+seconds="${FUZZ_SECONDS:-30}"
 seed="${FUZZ_SEED:-1}"
 jobs="${JOBS:-$(nproc)}"
 lock="${CEMENTSPH_BUILD_LOCK:-/tmp/cementsph-build.lock}"
@@ -39,6 +54,11 @@ if ! "$cxx" -print-file-name=libclang_rt.fuzzer-x86_64.a | grep -q /; then
   echo "ci-sanitizers.sh: libFuzzer runtime missing (scripts/install-deps.sh installs libclang-rt-14-dev)" >&2; exit 1
 fi
 mkdir -p "$out/obj" "$out/bin" "$out/findings"
+# ccache rewrites absolute paths under the source root to relative ones before hashing (CCACHE_BASEDIR) and leaves
+# the build folder's path out of the key of -g compiles (CCACHE_NOHASHDIR), so CI's clone at another path hits what
+# an earlier clone compiled. Objects with an absolute path in a -D (the test suites' CEMENTSPH_TEST_DATA_DIR and
+# CEMENTSPH_BINARY_DIR, cementsph-all's CEMENTSPH_DATA_DIR) still miss in a clone at a new path, as they must.
+export CCACHE_BASEDIR="$here" CCACHE_NOHASHDIR=1
 
 # ---- build ----
 sph_src=$(cd "$here" && find Modules/Core/Rheology/src Modules/Core/SPH/src Modules/Core/VoxelDarcy/src Modules/Simulation/Scene/src -name '*.cpp' | sort)
@@ -105,9 +125,14 @@ if [ "$unit_label" = 1 ]; then
   # The CMake tree, Debug with ASan + UBSan (GCC, see above); ccache when the machine has it (a warm cache makes
   # this mostly a relink).
   step=$SECONDS
-  sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+  # UBSan reports are fatal through UBSAN_OPTIONS=halt_on_error=1, not -fno-sanitize-recover: a report that cannot
+  # recover aborts before the runtime reads scripts/ubsan-suppressions.txt, and ITK's own headers need one rule.
+  sanitize="-fsanitize=address,undefined -fsanitize-recover=undefined -fno-omit-frame-pointer"
   cache_launcher=()
-  if command -v ccache >/dev/null 2>&1; then cache_launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+  if command -v ccache >/dev/null 2>&1; then
+    cache="env;CCACHE_BASEDIR=$here;CCACHE_NOHASHDIR=1;ccache" # kept by the build folder for later builds of it
+    cache_launcher=("-DCMAKE_CXX_COMPILER_LAUNCHER=$cache" "-DCMAKE_C_COMPILER_LAUNCHER=$cache")
+  fi
   mkdir -p "$cmake_out"
   if ! cmake -S "$here" -B "$cmake_out" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=gcc \
        -DCMAKE_CXX_COMPILER=g++ "${cache_launcher[@]}" -DCEMENTSPH_BUILD_BENCHMARKS=OFF \
@@ -117,11 +142,12 @@ if [ "$unit_label" = 1 ]; then
     tail -n 40 "$cmake_out/configure.log"; echo "ci-sanitizers.sh: configuring $cmake_out failed" >&2; exit 1
   fi
   # The suites of the unit label: every cementsph_add_gtest(<name> ... LABELS ... unit ...) of the tree (ctest
-  # cannot list them before they are built: their tests are discovered when ctest runs), then the filling suite
-  # and the programs the command suites start.
-  suite_targets=$(python3 - "$here" <<'PY'
+  # cannot list them before they are built: their tests are discovered when ctest runs), less those the clang
+  # build above already runs under the same sanitizers ($tests); the command suites build the program themselves.
+  suite_targets=$(python3 - "$here" "$(for t in $tests; do echo "${t%%:*}"; done)" <<'PY'
 import pathlib, re, sys
 root = pathlib.Path(sys.argv[1])
+covered = set(sys.argv[2].split())
 names = set()
 for f in root.rglob("CMakeLists.txt"):
     if f.relative_to(root).parts[0].startswith("build"):
@@ -133,24 +159,46 @@ for f in root.rglob("CMakeLists.txt"):
             if w in ("SOURCES", "LIBS", "TIMEOUT", "PROGRAM"):
                 labels = labels[:i]
                 break
-        if "unit" in labels:
+        if "unit" in " ".join(labels).replace('"', " ").replace(";", " ").split():
             names.add(words[0])
-print(" ".join(sorted(names)))
+print(" ".join(sorted(names - covered)))
 PY
   )
-  targets="$suite_targets VoxelDarcyFillingTest cementsph cementsph-all cementsph-drr"
-  echo "ci-sanitizers.sh: building $(echo $targets | wc -w) targets in $cmake_out (Debug -O1, ASan+UBSan)"
-  # -g puts the build folder into ccache's key (hash_dir): without this a clone at another path misses every object.
-  export CCACHE_BASEDIR="$here" CCACHE_NOHASHDIR=1
-  if ! flock "$lock" cmake --build "$cmake_out" -j"$jobs" --target $targets > "$cmake_out/build.log" 2>&1; then
-    grep -E "error|Error" "$cmake_out/build.log" | head -n 40; echo "ci-sanitizers.sh: sanitizer build failed ($cmake_out/build.log)" >&2; exit 1
-  fi
-  echo "ci-sanitizers.sh: unit label built in $((SECONDS - step)) s"
+  read -ra suites <<< "$suite_targets"
+  echo "ci-sanitizers.sh: building ${#suites[@]} unit suites in $cmake_out (GCC Debug -O1, ASan+UBSan)"
+  # Four targets at a time under the build lock, so a long cold build lets other builds of the machine in between.
+  : > "$cmake_out/build.log"
+  for ((i = 0; i < ${#suites[@]}; i += 4)); do
+    limit=()
+    if [ -n "${CI_DEADLINE:-}" ]; then
+      left=$((CI_DEADLINE - $(date +%s) - 300)) # 5 min kept for running the suites
+      if [ "$left" -le 0 ]; then
+        echo "ci-sanitizers.sh: the unit label's sanitizer build did not finish before CI's deadline (a cold ccache?):" \
+          "built ${i} of ${#suites[@]} suites; the cache keeps them, so the next run continues" >&2
+        exit 1
+      fi
+      limit=(timeout "$left")
+    fi
+    if ! "${limit[@]}" flock "$lock" cmake --build "$cmake_out" -j"$jobs" --target "${suites[@]:i:4}" >> "$cmake_out/build.log" 2>&1; then
+      if [ -n "${CI_DEADLINE:-}" ] && [ "$(date +%s)" -ge $((CI_DEADLINE - 300)) ]; then
+        echo "ci-sanitizers.sh: the unit label's sanitizer build did not finish before CI's deadline (a cold ccache?):" \
+          "stopped in suites $((i + 1))-$((i + 4)) of ${#suites[@]}; the cache keeps what was compiled, so the next run continues" >&2
+        exit 1
+      fi
+      grep -E "error|Error" "$cmake_out/build.log" | head -n 40; echo "ci-sanitizers.sh: sanitizer build failed ($cmake_out/build.log)" >&2; exit 1
+    fi
+  done
+  for t in $suite_targets; do
+    if [ -z "$(find "$cmake_out" -name "$t" -type f -perm -u+x -print -quit)" ]; then
+      echo "ci-sanitizers.sh: unit suite $t was not built in $cmake_out" >&2; exit 1
+    fi
+  done
+  echo "ci-sanitizers.sh: unit suites built in $((SECONDS - step)) s"
 fi
 
 # ---- runs ----
 export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
-export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:report_error_type=1:suppressions=$here/scripts/ubsan-suppressions.txt"
 export LSAN_OPTIONS="suppressions=$here/scripts/lsan-suppressions.txt:print_suppressions=0"
 export OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=2
 work="$(mktemp -d)"
@@ -186,18 +234,18 @@ for t in $tests; do
 done
 
 if [ "$unit_label" = 1 ]; then
-  # The suites, each test in its own process as ctest runs them; a sanitizer report fails its test.
+  # The suites, each test in its own process as ctest runs them, two at a time; a sanitizer report fails its test.
+  # The suites the clang build runs are not built here: ctest lists each as an unlabelled <name>_NOT_BUILT, which
+  # -L unit leaves out (that every suite meant to run was built is checked above).
   step=$SECONDS
-  for selection in "-L unit" "-R ^VoxelDarcyFilling"; do
-    # shellcheck disable=SC2086
-    if ctest --test-dir "$cmake_out" $selection -j"$jobs" --timeout 900 --output-on-failure > "$work/ctest.log" 2>&1; then
-      echo "suites ($selection): passed, $(grep -o 'tests failed out of [0-9]*' "$work/ctest.log" | grep -o '[0-9]*$') tests"
-    else
-      echo "suites ($selection): FAILED under ASan/UBSan"; grep -E "Failed|ERROR: |runtime error" "$work/ctest.log" | head -n 40
-      tail -n 40 "$work/ctest.log"; failed=1
-    fi
-  done
-  echo "ci-sanitizers.sh: suites ran in $((SECONDS - step)) s"
+  if ctest --test-dir "$cmake_out" -L unit -j"$jobs" --timeout 900 --output-on-failure > "$work/ctest.log" 2>&1; then
+    echo "unit label (GCC build): passed, $(grep -o 'tests failed out of [0-9]*' "$work/ctest.log" | grep -o '[0-9]*$') tests"
+  else
+    echo "unit label (GCC build): FAILED under ASan/UBSan"; grep -E "Failed|ERROR: |runtime error" "$work/ctest.log" | head -n 40
+    tail -n 40 "$work/ctest.log"; failed=1
+  fi
+  cp "$work/ctest.log" "$cmake_out/ctest-unit.log"
+  echo "ci-sanitizers.sh: unit label ran in $((SECONDS - step)) s"
 fi
 echo "ci-sanitizers.sh: $((SECONDS - start)) s in all"
 if [ "$failed" -ne 0 ]; then echo "ci-sanitizers.sh: sanitizer stage failed" >&2; exit 1; fi
