@@ -15,6 +15,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -58,7 +60,16 @@ struct XrayRequest {
   double searchRadiusMm = drr::XraySequenceOptions{}.injectionSearchRadiusMm;
   int maxColumns = 6;
   bool noPictures = false;
+  // The sequence's frames projected already (inject, as its run made them: InjectionRunOptions::onCtFrame) with the
+  // options xraySequenceOptions gives for its first frame; null: the frames' volumes are read and projected here.
+  std::shared_ptr<const drr::XraySequence> projected;
+  double projectedSeconds = 0.0; // what projecting them took
 };
 int runXray(const XrayRequest& request, nlohmann::json* metrics = nullptr);
+// The options `xray` projects a sequence with: the geometry for its first frame's voxel-centre bounds (the detector
+// fitted to them unless its size was given), the cement threshold, the threads, the injection point (given, else
+// tipMm: an inject folder's tip).
+drr::XraySequenceOptions xraySequenceOptions(const XrayRequest& request, const std::array<double, 6>& firstFrameBoundsMm,
+                                             const std::optional<drr::Vec3>& tipMm);
 
 } // namespace cementsph::app

@@ -6,6 +6,8 @@
 // cannula and outlet pressures over time), with a label map (continuum bone) cement_slices.png and
 // cement_surface.png (leaked cement red), and, when the scene key
 // simulated_ct_snapshots is on, the X-ray sequence of the snapshots in DIR/xray (`cementsph xray`, Fig. 12).
+// The pictures draw the run in memory (the filter's typed result and outputs; the X-ray frames projected as the
+// run makes them), never the files it has just written.
 // A failed picture is one line on stderr and exit status 3 (the numbers are written), as in `compare`.
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
@@ -16,6 +18,7 @@
 #include "cementsph/rendering/CementSurface.h"
 #include "cementsph/rendering/TipPressurePlot.h"
 
+#include "cementsph/drr/XraySequence.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/RunEstimate.h"
@@ -29,6 +32,8 @@
 #include <omp.h>
 
 #include <array>
+#include <chrono>
+#include <exception>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -37,6 +42,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 namespace {
 
@@ -183,9 +189,48 @@ rendering::TipPressureSeries tipPressureSeries(const scene::InjectionRunResult& 
   return series;
 }
 
+// inject's X-ray sequence (`cementsph xray` of the output folder), each frame projected as the run makes it
+// (InjectionRunOptions::onCtFrame), so no frame volume is read back nor held. A failed projection is the picture
+// step's failure (exit status 3), not the run's.
+struct XrayProjection {
+  XrayRequest request;
+  std::optional<drr::Vec3> tipMm;
+  std::shared_ptr<drr::XraySequence> sequence;
+  std::exception_ptr error;
+  double seconds = 0;
+
+  XrayProjection(const InjectRequest& a, const scene::SceneConfig& scene) {
+    request.sequence = {a.out};
+    request.out = (fs::path(a.out) / "xray").string();
+    request.drr.threads = a.threads;
+    tipMm = drr::Vec3{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()}; // as the folder's scene.json has it
+  }
+  void add(double timeS, const imaging::ImageType& frame) {
+    if (error) return;
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      if (!sequence)
+        sequence = std::make_shared<drr::XraySequence>(
+            xraySequenceOptions(request, imaging::geometryOf(&frame).physicalBounds(), tipMm));
+      sequence->addFrame(timeS, imaging::toVtk(&frame));
+    } catch (...) {
+      error = std::current_exception();
+    }
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  // The xray/ folder from the projected frames (the frame list and the rest as `cementsph xray` makes them).
+  void write() const {
+    if (error) std::rethrow_exception(error);
+    XrayRequest r = request;
+    r.projected = sequence;
+    r.projectedSeconds = seconds;
+    if (runXray(r) != 0) throw std::runtime_error("see the lines above");
+  }
+};
+
 // The run goes through the VTK algorithm (the same runner a VTK pipeline gets), which writes the files; returns
 // its typed result and its outputs in memory, which the pictures draw (rather than reading back the files).
-InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
+InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene, XrayProjection* xray) {
   const auto image = imaging::readVolume(a.ct);
   const auto spacing = image->GetSpacing();
   const std::string note =
@@ -196,6 +241,7 @@ InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene) {
   filter->SetScene(scene);
   filter->SetOutputDirectory(a.out);
   filter->SetPrintProgress(!a.quiet);
+  if (xray) filter->SetCtFrameObserver([xray](double t, const imaging::ImageType& frame) { xray->add(t, frame); });
   filter->Update();
   filter->RethrowIfFailed();
   InjectRun run;
@@ -221,7 +267,9 @@ int runInject(const InjectRequest& a, json* metrics) {
     scene.explicitKeys.insert("labels_path"); // set by the user, so an engine that ignores it says so
   }
   if (a.threads > 0) omp_set_num_threads(a.threads);
-  const InjectRun run = runFilter(a, scene);
+  std::optional<XrayProjection> xray;
+  if (scene.simulatedCtSnapshots && !a.noPictures) xray.emplace(a, scene);
+  const InjectRun run = runFilter(a, scene, xray ? &*xray : nullptr);
   if (metrics) *metrics = run.result.metrics;
   printSummary(run.result.summary, a.out);
   if (a.noPictures) return 0;
@@ -243,14 +291,7 @@ int runInject(const InjectRequest& a, json* metrics) {
   }
   step("injection_pressure.png",
        [&](const fs::path& png) { rendering::writeInjectionPressurePlot(tip, png); });
-  if (scene.simulatedCtSnapshots)
-    pictures.draw("xray/", out / "xray", [&](const fs::path&) {
-      XrayRequest xray;
-      xray.sequence = {a.out};
-      xray.out = (out / "xray").string();
-      xray.drr.threads = a.threads;
-      if (runXray(xray) != 0) throw std::runtime_error("see the lines above");
-    });
+  if (xray) pictures.draw("xray/", out / "xray", [&](const fs::path&) { xray->write(); });
   return pictures.status();
 }
 

@@ -126,24 +126,24 @@ struct XrayRun {
   double drrSeconds = 0.0;
 };
 
-// Geometry from the first frame, then the DRRs and their comparison.
+// Geometry from the first frame, then the DRRs (or those made already) and their comparison.
 void computeSequences(const XrayRequest& a, XrayRun& run) {
   const auto t = std::chrono::steady_clock::now();
-  const auto first = cementsph::imaging::readVolume(run.frames.paths[0]);
   run.fitted = !a.detectorSizeGiven;
-  drr::XraySequenceOptions& options = run.options;
-  options.geometry = cementsph::app::geometryForVolume(
-      a.drr, cementsph::imaging::geometryOf(first).physicalBounds(), run.fitted);
-  options.cementThresholdWaterMm = a.thresholdWaterMm;
-  options.threads = a.drr.threads;
-  if (!a.injectionPointMm.empty())
-    options.injectionPointMm = drr::Vec3{a.injectionPointMm[0], a.injectionPointMm[1], a.injectionPointMm[2]};
-  else
-    options.injectionPointMm = run.frames.tipMm;
-  options.injectionSearchRadiusMm = a.searchRadiusMm;
-  run.sequence = project(run.frames, options, first);
-  if (run.referenceFrames) run.reference = project(*run.referenceFrames, options);
-  run.drrSeconds = secondsSince(t);
+  if (a.projected) {
+    if (a.projected->frames().size() != run.frames.paths.size())
+      throw std::runtime_error("the sequence projected in memory has " + std::to_string(a.projected->frames().size()) +
+                               " frames, its frame list " + std::to_string(run.frames.paths.size()));
+    run.options = a.projected->options();
+    run.sequence = *a.projected;
+  } else {
+    const auto first = cementsph::imaging::readVolume(run.frames.paths[0]);
+    run.options = cementsph::app::xraySequenceOptions(a, cementsph::imaging::geometryOf(first).physicalBounds(),
+                                                      run.frames.tipMm);
+    run.sequence = project(run.frames, run.options, first);
+  }
+  if (run.referenceFrames) run.reference = project(*run.referenceFrames, run.options);
+  run.drrSeconds = secondsSince(t) + a.projectedSeconds;
   if (run.reference)
     run.comparison = drr::compareXraySequences(
         *run.sequence, *run.reference, a.toleranceGiven ? std::optional<double>(a.toleranceS) : std::nullopt);
@@ -269,6 +269,20 @@ cementsph::app::CommandRunner setupXray(CLI::App& sub) {
 } // namespace
 
 namespace cementsph::app {
+
+drr::XraySequenceOptions xraySequenceOptions(const XrayRequest& a, const std::array<double, 6>& firstFrameBoundsMm,
+                                             const std::optional<drr::Vec3>& tipMm) {
+  drr::XraySequenceOptions options;
+  options.geometry = geometryForVolume(a.drr, firstFrameBoundsMm, !a.detectorSizeGiven);
+  options.cementThresholdWaterMm = a.thresholdWaterMm;
+  options.threads = a.drr.threads;
+  if (!a.injectionPointMm.empty())
+    options.injectionPointMm = drr::Vec3{a.injectionPointMm[0], a.injectionPointMm[1], a.injectionPointMm[2]};
+  else
+    options.injectionPointMm = tipMm;
+  options.injectionSearchRadiusMm = a.searchRadiusMm;
+  return options;
+}
 
 int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
   const auto start = std::chrono::steady_clock::now();

@@ -14,6 +14,7 @@
 #include "cementsph/imaging/VolumeIO.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <filesystem>
@@ -94,4 +95,39 @@ TEST(InjectPictures, NoPicturesWritesNone) {
   EXPECT_TRUE(fs::exists(dir / "out" / "sequence.json"));
   EXPECT_FALSE(fs::exists(dir / "out" / "tip_pressure.png"));
   EXPECT_FALSE(fs::exists(dir / "out" / "xray"));
+}
+
+// inject projects its X-ray frames as the run makes them (InjectionRunOptions::onCtFrame), not from the files it
+// wrote. Oracle: `cementsph xray` on the same output folder, which reads every frame volume back from disk through
+// sequence.json: the same DRR frame files and sequence.csv byte for byte, the same metrics but for the timings and
+// the provenance (the command line).
+TEST(InjectPictures, TheXraySequenceProjectedDuringTheRunIsTheOneOfItsFiles) {
+  const fs::path dir = scratch("inject-xray-in-memory");
+  auto r = run({"inject", "--ct", (dir / "ct.nrrd").string(), "--scene", (dir / "scene.json").string(), "--out",
+                (dir / "out").string(), "--snapshot-interval-s", "0.5", "--quiet", "--set", "simulated_ct_snapshots=true"});
+  ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
+  r = run({"xray", "--sequence", (dir / "out").string(), "--out", (dir / "from-files").string(), "--no-pictures"});
+  ASSERT_EQ(r.exitCode, 0) << r.out << r.err;
+  const fs::path inMemory = dir / "out" / "xray", fromFiles = dir / "from-files";
+  auto text = [](const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  EXPECT_EQ(text(inMemory / "sequence.csv"), text(fromFiles / "sequence.csv"));
+  std::size_t frames = 0;
+  for (; fs::exists(fromFiles / ("sequence_drr_000" + std::to_string(frames) + ".nrrd")); ++frames) {
+    const std::string name = "sequence_drr_000" + std::to_string(frames) + ".nrrd"; // one writer: the same bytes
+    const std::string a = text(inMemory / name), b = text(fromFiles / name);
+    EXPECT_GT(a.size(), 1000u) << name; // a float DRR (compressed), not an empty file
+    EXPECT_TRUE(a == b) << name << " differs";
+  }
+  EXPECT_EQ(frames, 5u); // t = 0 and the 4 snapshots
+  auto metrics = [&](const fs::path& p) {
+    auto m = nlohmann::json::parse(text(p / "metrics.json"));
+    for (const char* key : {"timing_s", "provenance", "pictures", "render_backend"}) m.erase(key);
+    return m;
+  };
+  EXPECT_EQ(metrics(inMemory), metrics(fromFiles));
 }

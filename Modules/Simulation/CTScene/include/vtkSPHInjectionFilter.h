@@ -47,8 +47,10 @@
 #include <vtkImageAlgorithm.h>
 
 #include <exception>
+#include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 
 class vtkAlgorithmOutput;
 class vtkImageData;
@@ -107,6 +109,11 @@ public:
   vtkGetMacro(ProduceImageOutputs, bool);
   vtkBooleanMacro(ProduceImageOutputs, bool);
   void SetOutputDirectory(const std::string& dir);
+  // Each frame of the CT series as the run makes it (InjectionRunOptions::onCtFrame: simulated_ct_snapshots, with an
+  // OutputDirectory). Observes the run without changing its outputs, so setting it does not rerun the filter.
+  void SetCtFrameObserver(std::function<void(double timeS, const cementsph::imaging::ImageType& frame)> observer) {
+    this->CtFrameObserver = std::move(observer);
+  }
   const std::string& GetOutputDirectory() const { return this->OutputDirectory; }
 
   // All of a scene's values (the setters above then read them back).
@@ -150,6 +157,7 @@ protected:
   bool PrintProgress = false;
   bool ProduceImageOutputs = true;
   std::string OutputDirectory;
+  std::function<void(double, const cementsph::imaging::ImageType&)> CtFrameObserver;
   cementsph::scene::SceneConfig Base; // the values without a setter of their own
   std::string MetricsJSON, ErrorMessage;
   std::optional<cementsph::scene::InjectionRunResult> Result;

@@ -283,7 +283,8 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
                           {"cement_volume_ml", model->cementVolumeM3() * 1e6}};
   };
   detail::InjectionWriter writer(o.outDir, scene, hu,
-                                 [&] { return simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0); });
+                                 [&] { return simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0); },
+                                 o.onCtFrame);
 
   // The loop: steps of at most the time to the next snapshot or the end.
   const double T = scene.injectionDurationS();

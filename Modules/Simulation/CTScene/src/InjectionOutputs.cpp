@@ -40,9 +40,9 @@ std::string tipPressureCsv(const std::vector<TipRecord>& series, std::optional<d
 }
 
 InjectionWriter::InjectionWriter(std::string outDir, const SceneConfig& scene, double huPerRelativeDensity,
-                                 SimulatedCt simulatedCt)
+                                 SimulatedCt simulatedCt, CtFrameObserver onCtFrame)
     : outDir_(std::move(outDir)), scene_(scene), huPerRelativeDensity_(huPerRelativeDensity),
-      simulatedCt_(std::move(simulatedCt)) {
+      simulatedCt_(std::move(simulatedCt)), onCtFrame_(std::move(onCtFrame)) {
   if (!writing()) return;
   fs::create_directories(outDir_);
   // An earlier run's temporaries and snapshots must not mix with this run's (AtomicFile.h).
@@ -66,11 +66,14 @@ void InjectionWriter::ctFrame(double time, const std::string& ctName, const std:
   const auto t0 = std::chrono::steady_clock::now();
   imaging::ImageType::Pointer made;
   if (!now) made = simulatedCt_();
-  imaging::writeVolume(now ? now : made.GetPointer(), (fs::path(outDir_) / ctName).string());
+  const imaging::ImageType& frame = now ? *now : *made;
+  imaging::writeVolume(&frame, (fs::path(outDir_) / ctName).string());
   written_.push_back((fs::path(outDir_) / ctName).string());
   ctSnapshotWallS_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ctFrames_.push_back({{"index", ctFrames_.size()}, {"time_s", time}, {"simulated_ct", ctName},
                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
+  // After the cost above is taken: what the observer does (an X-ray projection) is not the frames' cost.
+  if (onCtFrame_) onCtFrame_(time, frame);
 }
 
 void InjectionWriter::queueParticles(vtkSmartPointer<vtkPolyData> particles, std::string path) {

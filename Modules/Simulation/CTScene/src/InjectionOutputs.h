@@ -48,7 +48,9 @@ std::string tipPressureCsv(const std::vector<TipRecord>& series, std::optional<d
 class InjectionWriter {
 public:
   using SimulatedCt = std::function<imaging::ImageType::Pointer()>; // the simulated CT of the state now
-  InjectionWriter(std::string outDir, const SceneConfig& scene, double huPerRelativeDensity, SimulatedCt simulatedCt);
+  using CtFrameObserver = std::function<void(double, const imaging::ImageType&)>; // InjectionRunOptions::onCtFrame
+  InjectionWriter(std::string outDir, const SceneConfig& scene, double huPerRelativeDensity, SimulatedCt simulatedCt,
+                  CtFrameObserver onCtFrame = {});
   ~InjectionWriter();
   InjectionWriter(const InjectionWriter&) = delete;
   InjectionWriter& operator=(const InjectionWriter&) = delete;
@@ -88,6 +90,7 @@ private:
   const SceneConfig& scene_;
   double huPerRelativeDensity_;
   SimulatedCt simulatedCt_;
+  CtFrameObserver onCtFrame_;
   bool ctSnapshots_ = false;
   nlohmann::json ctFrames_ = nlohmann::json::array();
   double ctSnapshotWallS_ = 0.0;

@@ -291,6 +291,7 @@ int vtkSPHInjectionFilter::RequestData(vtkInformation*, vtkInformationVector** i
     o.outDir = this->OutputDirectory;
     o.huPerRelativeDensity = this->HUPerRelativeDensity;
     o.progress = this->PrintProgress;
+    o.onCtFrame = this->CtFrameObserver;
     o.onProgress = [this](double fraction) {
       this->UpdateProgress(fraction);
       return !this->GetAbortExecute();

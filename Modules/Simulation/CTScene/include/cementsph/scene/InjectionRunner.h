@@ -57,6 +57,11 @@ struct InjectionRunOptions {
   // or in solid, pore space, the engine's own start checks) and return an empty result; no file is written. A
   // study checks all its runs this way before the first one starts, so bad input is one line at once.
   bool checkOnly = false;
+  // With simulated_ct_snapshots and files written: called with each frame of the CT series as it is made (t = 0
+  // without cement first, then each snapshot's; the last the final state), the frame on the region's grid as
+  // simulated_ct_NNNN.nrrd holds it, valid during the call only. A caller that projects the frames (inject's
+  // X-ray sequence) takes them here instead of reading the files back, and no frame is held after its call.
+  std::function<void(double timeS, const imaging::ImageType& frame)> onCtFrame;
 };
 
 // The typed result (InjectionModel.h): summary, the engine's figures, metrics.json as written, the images.
