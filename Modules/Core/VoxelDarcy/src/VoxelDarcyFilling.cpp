@@ -222,6 +222,43 @@ PressureSolver::Result PressureSolver::run(const PressureSystem& A, const Eigen:
   return result;
 }
 
+void VoxelBricks::reset(const std::array<int, 3>& size) {
+  size_ = size;
+  inverseX_ = std::numeric_limits<std::uint64_t>::max() / std::uint64_t(size[0]) + 1;
+  inverseY_ = std::numeric_limits<std::uint64_t>::max() / std::uint64_t(size[1]) + 1;
+  bricksX_ = std::size_t((size[0] + kEdge - 1) >> kEdgeBits);
+  bricksXY_ = bricksX_ * std::size_t((size[1] + kEdge - 1) >> kEdgeBits);
+  directory_.assign(bricksXY_ * std::size_t((size[2] + kEdge - 1) >> kEdgeBits), -1);
+  bricks_.clear();
+  origin_.clear();
+}
+
+VoxelBricks::Cell VoxelBricks::touch(std::size_t c, const std::vector<double>& initialViscosity) {
+  const Cell found = find(c);
+  if (found.brick) return found;
+  const std::size_t nx = std::size_t(size_[0]), ny = std::size_t(size_[1]);
+  const std::size_t i = c % nx, r = c / nx, j = r % ny, k = r / ny;
+  std::int32_t& at = directory_[(k >> kEdgeBits) * bricksXY_ + (j >> kEdgeBits) * bricksX_ + (i >> kEdgeBits)];
+  if (at < 0) {
+    auto brick = std::make_unique<Brick>(); // every voxel at Voxel's initial values
+    const std::array<int, 3> first{int(i & ~std::size_t(kEdge - 1)), int(j & ~std::size_t(kEdge - 1)),
+                                   int(k & ~std::size_t(kEdge - 1))};
+    at = std::int32_t(bricks_.size());
+    bricks_.push_back(std::move(brick));
+    origin_.push_back(first);
+    if (!initialViscosity.empty()) // setVoxelViscosity's values (the part of the brick inside the region)
+      for (int local = 0; local < kVoxels; ++local) {
+        const std::size_t vi = std::size_t(first[0]) + std::size_t(local & (kEdge - 1)),
+                          vj = std::size_t(first[1]) + std::size_t((local >> kEdgeBits) & (kEdge - 1)),
+                          vk = std::size_t(first[2]) + std::size_t(local >> (2 * kEdgeBits));
+        if (vi >= nx || vj >= ny || vk >= std::size_t(size_[2])) continue;
+        bricks_.back()->voxel[local].viscosity = initialViscosity[vi + nx * (vj + ny * vk)];
+      }
+  }
+  const int local = int(((k & (kEdge - 1)) << (2 * kEdgeBits)) | ((j & (kEdge - 1)) << kEdgeBits) | (i & (kEdge - 1)));
+  return {bricks_[std::size_t(at)].get(), local};
+}
+
 VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings settings)
     : medium_(std::move(medium)), settings_(settings) {
   const std::size_t n = medium_.count();
@@ -237,27 +274,17 @@ VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings setting
     faceDistance_[std::size_t(a)] = medium_.spacing[a];
     faceArea_[std::size_t(a)] = voxelVolume_ / medium_.spacing[a];
   }
-  state_.assign(n, kClosed);
+  // A voxel is closed (impermeable) where its porosity is 0, a pore voxel where it is above: state() reads it.
   for (std::size_t c = 0; c < n; ++c) {
     const double phi = medium_.porosity[c], k = medium_.permeability[c];
     if (!(phi >= 0 && phi <= 1))
       throw std::invalid_argument("voxel Darcy: porosity " + std::to_string(phi) + " at voxel " + mm(medium_.centre(c)) +
                                   " is outside [0, 1]");
-    if (phi > 0) {
-      if (!(k > 0) || !std::isfinite(k))
-        throw std::invalid_argument("voxel Darcy: permeability " + std::to_string(k) + " m^2 at the pore voxel " +
-                                    mm(medium_.centre(c)) + " is not a positive number");
-      state_[c] = kEmpty;
-    }
+    if (phi > 0 && (!(k > 0) || !std::isfinite(k)))
+      throw std::invalid_argument("voxel Darcy: permeability " + std::to_string(k) + " m^2 at the pore voxel " +
+                                  mm(medium_.centre(c)) + " is not a positive number");
   }
-  fill_.assign(n, 0.0);
-  pressure_.assign(n, 0.0);
-  viscosity_.assign(n, 1.0);
-  arrival_.assign(n, -1.0);
-  faceFlux_.assign(3 * n, 0.0f);
-  unknown_.assign(n, -1);
-  barred_.assign(n, 0);
-  inFront_.assign(n, 0);
+  bricks_.reset(medium_.size);
 }
 
 void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const std::vector<float>& porosity,
@@ -270,10 +297,9 @@ void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const
     if (!(porosity[i] > 0 && porosity[i] <= 1) || !(permeability[i] > 0) || !std::isfinite(permeability[i]))
       throw std::invalid_argument("voxel Darcy: openVoxels: porosity must be in (0, 1] and permeability > 0 at " +
                                   mm(medium_.centre(c)));
-    if (state_[c] != kClosed) continue;
-    medium_.porosity[c] = porosity[i];
+    if (state(c) != kClosed) continue;
+    medium_.porosity[c] = porosity[i]; // > 0: the voxel is a pore voxel from now on
     medium_.permeability[c] = permeability[i];
-    state_[c] = kEmpty;
   }
 }
 
@@ -287,7 +313,7 @@ void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) 
     v[std::size_t(a)] = int(i);
   }
   const std::size_t own = medium_.index(v[0], v[1], v[2]);
-  if (state_[own] == kClosed)
+  if (state(own) == kClosed)
     throw std::invalid_argument("voxel Darcy: the outlet " + mm(centre) + " lies in an impermeable voxel");
   source_.clear();
   source_.push_back(own);
@@ -298,7 +324,7 @@ void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) 
       for (int i = v[0] - r[0]; i <= v[0] + r[0]; ++i) {
         if (i < 0 || j < 0 || k < 0 || i >= medium_.size[0] || j >= medium_.size[1] || k >= medium_.size[2]) continue;
         const std::size_t c = medium_.index(i, j, k);
-        if (c == own || state_[c] == kClosed) continue;
+        if (c == own || state(c) == kClosed) continue;
         if ((medium_.centre(c) - centre).norm() <= radius) source_.push_back(c);
       }
   std::sort(source_.begin(), source_.end());
@@ -328,23 +354,26 @@ void VoxelDarcyFilling::updateShearViscosity() {
     const double mu = shearLaw_(rheology::darcyShearRate(q, medium_.permeability[c], medium_.porosity[c], flowIndex_));
     if (!(mu > 0) || !std::isfinite(mu))
       throw FillingError("voxel Darcy: the viscosity law gave " + std::to_string(mu) + " Pa s at " + mm(medium_.centre(c)));
-    viscosity_[c] = mu;
+    const VoxelBricks::Cell cell = touch(c);
+    cell->viscosity = mu;
   }
   const int nx = medium_.size[0], ny = medium_.size[1];
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
   for (std::size_t c : front_) {
-    const auto v = medium_.ijk(c);
+    const VoxelBricks::Cell own = touch(c);
+    const auto v = bricks_.ijk(c);
     double best = -1;
     for (int a = 0; a < 3; ++a)
       for (int sign : {-1, 1}) {
         const int coord = v[std::size_t(a)] + sign;
         if (coord < 0 || coord >= medium_.size[a]) continue;
         const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[a]);
-        if (state_[m] != kFilled) continue;
-        const double inflow = std::abs(faceFlux_[3 * (sign > 0 ? c : m) + std::size_t(a)]);
+        const VoxelBricks::Cell cell = bricks_.find(m);
+        if (state(m, cell) != kFilled) continue;
+        const double inflow = std::abs(faceFlux(sign > 0 ? c : m, a));
         if (inflow > best) {
           best = inflow;
-          viscosity_[c] = viscosity_[m];
+          own->viscosity = cell->viscosity;
         }
       }
   }
@@ -358,41 +387,51 @@ void VoxelDarcyFilling::setViscosity(double mu) {
   uniformViscosity_ = true;
   viscosityValue_ = mu;
   for (const auto* list : {&filled_, &newlyFilled_, &front_, &wet_})
-    for (std::size_t c : *list) viscosity_[c] = mu;
+    for (std::size_t c : *list) {
+      const VoxelBricks::Cell cell = touch(c);
+      cell->viscosity = mu;
+    }
 }
 
 void VoxelDarcyFilling::setVoxelViscosity(std::vector<double> mu) {
-  if (mu.size() != viscosity_.size()) throw std::invalid_argument("voxel Darcy: one viscosity per voxel");
-  viscosity_ = std::move(mu);
+  if (mu.size() != medium_.count()) throw std::invalid_argument("voxel Darcy: one viscosity per voxel");
+  voxelViscosity_ = std::move(mu);
+  bricks_.forEachVoxel([&](std::size_t c, VoxelBricks::Brick& b, int local) { b.voxel[local].viscosity = voxelViscosity_[c]; });
   uniformViscosity_ = false;
 }
 
 double VoxelDarcyFilling::cementVolume() const {
   double v = 0;
-  for (std::size_t c : wet_) v += fill_[c] * poreVolume(c);
+  for (std::size_t i = 0; i < wet_.size(); ++i) {
+    const VoxelBricks::Cell& cell = wetCell_[i];
+    v += cell->fill * poreVolume(wet_[i]);
+  }
   return v;
 }
 
 double VoxelDarcyFilling::sourcePressure() const {
   double sum = 0, w = 0;
-  for (std::size_t c : source_)
-    if (state_[c] == kFilled) {
-      sum += poreVolume(c) * pressure_[c];
+  for (std::size_t c : source_) {
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    if (state(c, cell) == kFilled) {
+      sum += poreVolume(c) * cell->pressure;
       w += poreVolume(c);
     }
+  }
   return w > 0 ? sum / w : settings_.frontPressurePa;
 }
 
 Eigen::Vector3d VoxelDarcyFilling::darcyVelocity(std::size_t c) const {
-  const auto v = medium_.ijk(c);
+  const auto v = bricks_.ijk(c);
+  const VoxelBricks::Cell own = bricks_.find(v[0], v[1], v[2]);
+  if (!own.brick) return Eigen::Vector3d::Zero(); // the cement never came near: no flux was written there
   Eigen::Vector3d q;
   for (int a = 0; a < 3; ++a) {
-    const double plus = faceFlux_[3 * c + std::size_t(a)];
+    const double plus = own->faceFlux[a];
     double minus = 0;
     if (v[std::size_t(a)] > 0) {
-      const std::size_t stride = a == 0 ? 1 : a == 1 ? std::size_t(medium_.size[0])
-                                                     : std::size_t(medium_.size[0]) * std::size_t(medium_.size[1]);
-      minus = faceFlux_[3 * (c - stride) + std::size_t(a)];
+      const VoxelBricks::Cell below = bricks_.neighbour(own, v, a, -1);
+      if (below.brick) minus = below->faceFlux[a];
     }
     q[a] = 0.5 * (plus + minus) / faceArea_[std::size_t(a)];
   }
@@ -400,41 +439,54 @@ Eigen::Vector3d VoxelDarcyFilling::darcyVelocity(std::size_t c) const {
 }
 
 void VoxelDarcyFilling::markFilled(std::size_t c) {
-  state_[c] = kFilled;
-  fill_[c] = 1.0;
-  pressure_[c] = settings_.frontPressurePa; // warm start: the front's pressure, where it was
-  if (uniformViscosity_ && !shearLaw_) viscosity_[c] = viscosityValue_;
+  const VoxelBricks::Cell cell = touch(c);
+  cell->filled = 1;
+  cell->fill = 1.0;
+  cell->pressure = settings_.frontPressurePa; // warm start: the front's pressure, where it was
+  if (uniformViscosity_ && !shearLaw_) cell->viscosity = viscosityValue_;
   newlyFilled_.push_back(c);
 }
 
 void VoxelDarcyFilling::wet(std::size_t c) {
-  if (arrival_[c] >= 0) return;
-  arrival_[c] = time_;
+  const VoxelBricks::Cell cell = touch(c);
+  if (cell->arrival >= 0) return;
+  cell->arrival = time_;
   wet_.push_back(c);
+  wetCell_.push_back(cell);
   // (a shear-thinning run's front voxels already have their upstream viscosity)
-  if (uniformViscosity_ && (!shearLaw_ || !inFront_[c])) viscosity_[c] = viscosityValue_;
+  if (uniformViscosity_ && (!shearLaw_ || !cell->inFront)) cell->viscosity = viscosityValue_;
 }
 
 void VoxelDarcyFilling::findFront() {
-  for (std::size_t c : front_) inFront_[c] = 0;
+  for (std::size_t c : front_) {
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    cell->inFront = 0;
+  }
   front_.clear();
   const int nx = medium_.size[0], ny = medium_.size[1];
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
-  for (std::size_t c : filled_) {
-    const auto v = medium_.ijk(c);
+  for (std::size_t row = 0; row < filled_.size(); ++row) {
+    const std::size_t c = filled_[row];
+    const auto& v = filledIjk_[row];
     for (int a = 0; a < 3; ++a)
       for (int sign : {-1, 1}) {
         const int coord = v[std::size_t(a)] + sign;
         if (coord < 0 || coord >= medium_.size[a]) continue;
         const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[a]);
-        if (state_[m] != kEmpty || inFront_[m]) continue;
-        inFront_[m] = 1;
+        if (medium_.porosity[m] <= 0) continue; // closed
+        VoxelBricks::Cell cell = bricks_.neighbour(filledCell_[row], v, a, sign);
+        if (!cell.brick) cell = touch(m); // the front's state lives in bricks too
+        if (cell->filled || cell->inFront) continue;
+        cell->inFront = 1;
         front_.push_back(m);
       }
   }
   std::sort(front_.begin(), front_.end());
   if (uniformViscosity_ && !shearLaw_)
-    for (std::size_t m : front_) viscosity_[m] = viscosityValue_;
+    for (std::size_t m : front_) {
+      const VoxelBricks::Cell cell = bricks_.find(m);
+      cell->viscosity = viscosityValue_;
+    }
 }
 
 // Volume beyond a voxel's pore volume moves on to the nearest unfilled pore voxels, reached through
@@ -447,21 +499,23 @@ void VoxelDarcyFilling::depositExcess(std::size_t from, double volume) {
   while (volume > 0 && !queue.empty()) {
     const std::size_t c = queue.front();
     queue.pop_front();
-    const auto v = medium_.ijk(c);
+    const auto v = bricks_.ijk(c);
     const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (const auto& s : d) {
       const int i = v[0] + s[0], j = v[1] + s[1], k = v[2] + s[2];
       if (i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz) continue;
       const std::size_t n = medium_.index(i, j, k);
-      if (state_[n] == kClosed || visited(n)) continue;
+      if (state(n) == kClosed || visited(n)) continue;
       seen.push_back(n);
-      if (state_[n] == kEmpty) {
-        const double room = (1.0 - fill_[n]) * poreVolume(n);
-        const double put = std::min(room, volume);
+      if (state(n) == kEmpty) {
         wet(n);
-        fill_[n] += put / poreVolume(n);
+        const VoxelBricks::Cell cell = bricks_.find(n);
+        double& voxelFill = cell->fill;
+        const double room = (1.0 - voxelFill) * poreVolume(n);
+        const double put = std::min(room, volume);
+        voxelFill += put / poreVolume(n);
         volume -= put;
-        if (fill_[n] >= 1.0 - 1e-12) markFilled(n);
+        if (voxelFill >= 1.0 - 1e-12) markFilled(n);
         if (volume <= 0) return;
       } else {
         queue.push_back(n);
@@ -473,7 +527,6 @@ void VoxelDarcyFilling::depositExcess(std::size_t from, double volume) {
                        " mm^3 had nowhere to go at t = " + std::to_string(time_) +
                        " s); enlarge roi_size_mm or inject less");
 }
-
 double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   if (source_.empty()) throw std::logic_error("voxel Darcy: setSource before step");
   if (!(dtMax > 0) || !(flowRate >= 0)) throw std::invalid_argument("voxel Darcy: step needs dtMax > 0, flow rate >= 0");
@@ -483,21 +536,43 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
 
   // Unknowns: the filled voxels, numbered in voxel order (so each row's columns come out sorted). The
   // voxels filled since the last step are merged into the sorted list; a voxel never empties again.
+  // Each filled voxel's place in its brick goes along with it (filledCell_; bricks never move).
   if (!newlyFilled_.empty()) {
     std::sort(newlyFilled_.begin(), newlyFilled_.end());
-    const std::size_t old = filled_.size();
-    filled_.insert(filled_.end(), newlyFilled_.begin(), newlyFilled_.end());
-    std::inplace_merge(filled_.begin(), filled_.begin() + std::ptrdiff_t(old), filled_.end());
+    // (into buffers kept from step to step: no fresh pages to fault in each step)
+    std::vector<std::size_t>& voxels = mergedVoxels_;
+    std::vector<VoxelBricks::Cell>& cells = mergedCells_;
+    std::vector<std::array<int, 3>>& ijk = mergedIjk_;
+    voxels.resize(filled_.size() + newlyFilled_.size());
+    cells.resize(voxels.size());
+    ijk.resize(voxels.size());
+    std::size_t a = 0, b = 0;
+    for (std::size_t out = 0; out < voxels.size(); ++out)
+      if (b == newlyFilled_.size() || (a < filled_.size() && filled_[a] < newlyFilled_[b])) {
+        voxels[out] = filled_[a];
+        ijk[out] = filledIjk_[a];
+        cells[out] = filledCell_[a++];
+      } else {
+        voxels[out] = newlyFilled_[b++];
+        ijk[out] = bricks_.ijk(voxels[out]);
+        cells[out] = bricks_.find(ijk[out][0], ijk[out][1], ijk[out][2]);
+      }
+    filled_.swap(voxels);
+    filledCell_.swap(cells);
+    filledIjk_.swap(ijk);
     newlyFilled_.clear();
   }
   const int unknowns = int(filled_.size());
-  for (int row = 0; row < unknowns; ++row) unknown_[filled_[std::size_t(row)]] = row;
+  for (int row = 0; row < unknowns; ++row) {
+    const VoxelBricks::Cell& cell = filledCell_[std::size_t(row)];
+    cell->unknown = row;
+  }
   findFront();
 
   // The source: spread over the filled outlet voxels by pore volume; while none is filled, the cement
   // goes straight into the outlet voxels.
   double filledSourcePore = 0, openSourcePore = 0;
-  for (std::size_t c : source_) (state_[c] == kFilled ? filledSourcePore : openSourcePore) += poreVolume(c);
+  for (std::size_t c : source_) (state(c) == kFilled ? filledSourcePore : openSourcePore) += poreVolume(c);
 
   // Front links: (filled voxel, front voxel, transmissibility).
   struct Link { std::size_t from, to; double t; };
@@ -524,9 +599,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
     for (int row = 0; row < unknowns; ++row) {
       const std::size_t c = filled_[std::size_t(row)];
       A.rowStart[std::size_t(row)] = nnz;
-      x[row] = pressure_[c];
-      const auto v = medium_.ijk(c);
-      const double lc = mobility(c);
+      const VoxelBricks::Cell own = filledCell_[std::size_t(row)];
+      x[row] = own->pressure;
+      const auto& v = filledIjk_[std::size_t(row)];
+      const double lc = mobility(c, own);
       double diagonal = 0;
       int diagonalAt = -1;
       // Neighbours in increasing voxel order: -z, -y, -x, (self), +x, +y, +z.
@@ -542,18 +618,21 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
         const int coord = v[std::size_t(axis)] + sign;
         if (coord < 0 || coord >= medium_.size[axis]) continue;
         const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[axis]);
-        if (state_[m] == kClosed || barred_[m]) continue;
+        if (medium_.porosity[m] <= 0) continue; // closed
+        // an open neighbour of a filled voxel is filled or on the front: its brick is allocated
+        const VoxelBricks::Cell cell = bricks_.neighbour(own, v, axis, sign);
+        if (cell->barred) continue;
         const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
-        const double lm = mobility(m);
-        if (state_[m] == kFilled) {
+        const double lm = mobility(m, cell);
+        if (cell->filled) {
           const double t = area * 2.0 * lc * lm / ((lc + lm) * dist); // harmonic mean mobility
           diagonal += t;
-          inner[nnz] = unknown_[m];
+          inner[nnz] = cell->unknown;
           value[nnz++] = -t;
         } else {
           // Ghost fluid: p_front at f of the way across the front voxel; half a voxel of this one's
           // mobility in series with f of the front voxel's.
-          const double resistance = 0.5 * dist / lc + fill_[m] * dist / lm;
+          const double resistance = 0.5 * dist / lc + cell->fill * dist / lm;
           const double t = area / resistance;
           diagonal += t;
           b[row] += t * frontPressure(m);
@@ -577,7 +656,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
     if (!r.converged) ++stats_.unconverged;
     if (!x.allFinite())
       throw FillingError("voxel Darcy: the pressure solve gave a non-finite value at t = " + std::to_string(time_) + " s");
-    for (int row = 0; row < unknowns; ++row) pressure_[filled_[std::size_t(row)]] = x[row];
+    for (int row = 0; row < unknowns; ++row) {
+      const VoxelBricks::Cell& cell = filledCell_[std::size_t(row)];
+      cell->pressure = x[row];
+    }
     solveSeconds += seconds(ts);
     stats_.solveSeconds += seconds(ts);
   };
@@ -590,54 +672,65 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   const std::vector<std::size_t>& front = capillary && unknowns > 0 ? front_ : none;
   auto upstreamPressure = [&](std::size_t m) {
     double up = -std::numeric_limits<double>::infinity();
-    const auto v = medium_.ijk(m);
+    const auto v = bricks_.ijk(m);
     for (int a = 0; a < 3; ++a)
       for (int sign : {-1, 1}) {
         const int coord = v[std::size_t(a)] + sign;
         if (coord < 0 || coord >= medium_.size[a]) continue;
         const std::size_t c = std::size_t(std::ptrdiff_t(m) + sign * stride[a]);
-        if (state_[c] == kFilled) up = std::max(up, pressure_[c]);
+        const VoxelBricks::Cell cell = bricks_.find(c);
+        if (state(c, cell) == kFilled) up = std::max(up, cell->pressure);
       }
     return up;
   };
   // Face fluxes of the last solve (velocities, shear rates), signed along +axis; a front link's is its inflow.
   auto faceFluxes = [&]() {
-    for (std::size_t c : fluxWritten_)
-      for (int a = 0; a < 3; ++a) faceFlux_[3 * c + std::size_t(a)] = 0.0f;
+    for (std::size_t c : fluxWritten_) {
+      const VoxelBricks::Cell cell = bricks_.find(c);
+      for (int a = 0; a < 3; ++a) cell->faceFlux[a] = 0.0f;
+    }
     fluxWritten_ = filled_;
     fluxWritten_.insert(fluxWritten_.end(), front_.begin(), front_.end());
-    for (std::size_t c : filled_) {
-      const auto v = medium_.ijk(c);
+    for (std::size_t row = 0; row < filled_.size(); ++row) {
+      const std::size_t c = filled_[row];
+      const VoxelBricks::Cell own = filledCell_[row];
+      const auto& v = filledIjk_[row];
       for (int a = 0; a < 3; ++a) {
         if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
         const std::size_t m = c + std::size_t(stride[a]);
-        if (state_[m] != kFilled) continue;
-        const double lc = mobility(c), lm = mobility(m);
+        const VoxelBricks::Cell cell = bricks_.neighbour(own, v, a, 1);
+        if (state(m, cell) != kFilled) continue;
+        const double lc = mobility(c, own), lm = mobility(m, cell);
         const double t = faceArea_[std::size_t(a)] * 2.0 * lc * lm / ((lc + lm) * faceDistance_[std::size_t(a)]);
-        faceFlux_[3 * c + std::size_t(a)] = float(t * (pressure_[c] - pressure_[m]));
+        own->faceFlux[a] =
+            float(t * (own->pressure - cell->pressure));
       }
     }
     for (const Link& l : links) {
-      const double q = std::max(0.0, l.t * (pressure_[l.from] - frontPressure(l.to)));
+      const VoxelBricks::Cell from = bricks_.find(l.from), to = bricks_.find(l.to);
+      const double q = std::max(0.0, l.t * (from->pressure - frontPressure(l.to)));
       const std::ptrdiff_t d = std::ptrdiff_t(l.to) - std::ptrdiff_t(l.from);
       for (int a = 0; a < 3; ++a)
-        if (d == stride[a]) faceFlux_[3 * l.from + std::size_t(a)] = float(q);
-        else if (d == -stride[a]) faceFlux_[3 * l.to + std::size_t(a)] = float(-q);
+        if (d == stride[a]) from->faceFlux[a] = float(q);
+        else if (d == -stride[a]) to->faceFlux[a] = float(-q);
     }
   };
   if (capillary)
-    for (std::size_t m : front) barred_[m] = upstreamPressure(m) <= frontPressure(m);
+    for (std::size_t m : front) {
+      const VoxelBricks::Cell cell = bricks_.find(m);
+      cell->barred = upstreamPressure(m) <= frontPressure(m);
+    }
   for (int pass = 0; pass < (unknowns > 0 ? picardIterations_ : 0); ++pass) {
     if (shearLaw_) updateShearViscosity();
     for (int round = 0;; ++round) {
       if (capillary && !front.empty()) {
         bool anyOpen = false;
-        for (std::size_t m : front) anyOpen = anyOpen || !barred_[m];
+        for (std::size_t m : front) anyOpen = anyOpen || !barredAt(m);
         if (!anyOpen) {
           std::size_t easiest = front.front();
           for (std::size_t m : front)
             if (upstreamPressure(m) - frontPressure(m) > upstreamPressure(easiest) - frontPressure(easiest)) easiest = m;
-          barred_[easiest] = 0;
+          setBarred(easiest, false);
         }
       }
       assemble();
@@ -649,8 +742,8 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
       bool changed = false;
       for (std::size_t m : front) {
         const bool open = upstreamPressure(m) > frontPressure(m);
-        if (open == !barred_[m]) continue;
-        barred_[m] = !open;
+        if (open == !barredAt(m)) continue;
+        setBarred(m, !open);
         changed = true;
       }
       ++stats_.capillaryRounds;
@@ -665,7 +758,8 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   std::vector<std::pair<std::size_t, double>> inflow; // front voxel, m^3/s
   inflow.reserve(links.size());
   for (const Link& l : links) {
-    const double q = std::max(0.0, l.t * (pressure_[l.from] - frontPressure(l.to)));
+    const VoxelBricks::Cell from = bricks_.find(l.from);
+    const double q = std::max(0.0, l.t * (from->pressure - frontPressure(l.to)));
     inflow.push_back({l.to, q});
   }
   // No outlet voxel filled yet (the start, or an outlet moved into fresh bone: VoxelDarcyInjection's second
@@ -673,7 +767,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   // stand still (their pressure solves to the front's).
   if (filledSourcePore == 0)
     for (std::size_t c : source_)
-      if (state_[c] == kEmpty) inflow.push_back({c, flowRate * poreVolume(c) / openSourcePore});
+      if (state(c) == kEmpty) inflow.push_back({c, flowRate * poreVolume(c) / openSourcePore});
   std::sort(inflow.begin(), inflow.end());
   std::size_t merged = 0; // one entry per front voxel
   for (std::size_t i = 0; i < inflow.size(); ++i) {
@@ -686,7 +780,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   // The step: no voxel overshoots full by more than maxFillPerStep of its pore volume.
   double dt = dtMax;
   for (const auto& [c, q] : inflow)
-    if (q > 0) dt = std::min(dt, std::max(1.0 - fill_[c], settings_.maxFillPerStep) * poreVolume(c) / q);
+    if (q > 0) dt = std::min(dt, std::max(1.0 - fill()[c], settings_.maxFillPerStep) * poreVolume(c) / q);
   if (!(dt > 0) || !std::isfinite(dt)) throw FillingError("voxel Darcy: no admissible step at t = " + std::to_string(time_) + " s");
   // The flux of the solve balances the source exactly (each row of the system is a voxel's balance), so the
   // inflow adds up to the flow rate; the remainder (round-off, the solver's tolerance) is spread so that
@@ -700,9 +794,11 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
     if (q <= 0) continue;
     inflow_.push_back({c, q * scale});
     wet(c);
-    fill_[c] += q * scale * dt / poreVolume(c);
-    if (fill_[c] > 1.0) excess.push_back({c, (fill_[c] - 1.0) * poreVolume(c)});
-    if (fill_[c] >= 1.0 - 1e-12) markFilled(c);
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    double& voxelFill = cell->fill;
+    voxelFill += q * scale * dt / poreVolume(c);
+    if (voxelFill > 1.0) excess.push_back({c, (voxelFill - 1.0) * poreVolume(c)});
+    if (voxelFill >= 1.0 - 1e-12) markFilled(c);
   }
   time_ += dt;
   injected_ += flowRate * dt;
@@ -710,6 +806,8 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
     throw FillingError("voxel Darcy: the cement cannot enter the pore space at t = " + std::to_string(time_) + " s");
   for (const auto& [c, e] : excess) depositExcess(c, e);
   ++stats_.steps;
+  stats_.bricks = bricks_.allocated();
+  stats_.brickBytes = bricks_.bytes();
   return dt;
 }
 

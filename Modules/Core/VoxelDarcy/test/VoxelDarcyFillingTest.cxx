@@ -9,7 +9,10 @@
 //  * the preconditioned solver (MIC(0) conjugate gradient) against a direct solve (Eigen's SimplicialLDLT),
 //    and the whole step's pressure against a system assembled here, densely, from the fill it started from;
 //  * the active-set bookkeeping (issue 23) against dense passes over every voxel: the cement volume, the
-//    voxels with cement, the viscosity after a change, and the same fill in a region three times as wide.
+//    voxels with cement, the viscosity after a change, and the same fill in a region three times as wide;
+//  * the brick storage (issue 23): its index arithmetic against plain division and lookups, and the bricks a
+//    run allocates against those its cement and front touch, counted here, the same in a region 27 times
+//    the volume.
 #include "cementsph/voxeldarcy/VoxelDarcyFilling.h"
 #include "cementsph/rheology/Rheology.h"
 
@@ -17,6 +20,7 @@
 #include <Eigen/SparseCore>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -395,16 +399,23 @@ TEST(VoxelDarcySolver, EachStepsPressureIsTheDirectSolutionOfItsSystem) {
               worst, filling.statistics().lastUnknowns);
 }
 
-TEST(VoxelDarcySolver, ActiveSetBookkeepingAgreesWithDensePassesAndTheRegionDoesNotMatter) {
-  // The same 21^3 medium alone and in the middle of a 63^3 region of more pore space that the cement never reaches.
-  const VoxelMedium small = heterogeneous(21, 5);
-  VoxelMedium large = heterogeneous(63, 6);
+// `small` (n^3) in the middle of a heterogeneous (3n)^3 region of more pore space, at the same positions.
+VoxelMedium embedded(const VoxelMedium& small, unsigned seed) {
+  const int n = small.size[0];
+  VoxelMedium large = heterogeneous(3 * n, seed);
   for (std::size_t c = 0; c < small.count(); ++c) {
     const auto v = small.ijk(c);
-    const std::size_t o = large.index(v[0] + 21, v[1] + 21, v[2] + 21);
+    const std::size_t o = large.index(v[0] + n, v[1] + n, v[2] + n);
     large.porosity[o] = small.porosity[c];
     large.permeability[o] = small.permeability[c];
   }
+  return large;
+}
+
+TEST(VoxelDarcySolver, ActiveSetBookkeepingAgreesWithDensePassesAndTheRegionDoesNotMatter) {
+  // The same 21^3 medium alone and in the middle of a 63^3 region of more pore space that the cement never reaches.
+  const VoxelMedium small = heterogeneous(21, 5);
+  const VoxelMedium large = embedded(small, 6);
   VoxelDarcyFilling a(small), b(large);
   for (VoxelDarcyFilling* f : {&a, &b}) {
     f->setSource(Eigen::Vector3d::Zero(), 1.05e-3); // 2.1 voxels: no centre on the sphere, whatever the round-off
@@ -453,6 +464,99 @@ TEST(VoxelDarcySolver, ActiveSetBookkeepingAgreesWithDensePassesAndTheRegionDoes
   EXPECT_EQ(outside, 0.0);
   EXPECT_LT(worstFill, 1e-6);
   EXPECT_NEAR(a.sourcePressure(), b.sourcePressure(), 1e-6 * a.sourcePressure());
+}
+
+TEST(VoxelBricks, IndexArithmeticAgreesWithDivisionAndNeighboursWithLookups) {
+  // Sizes with an axis of one voxel (the inverse of 1 is the special case), not multiples of the brick's 8,
+  // and one whose index needs all of 32 bits' reach in the last plane.
+  for (const std::array<int, 3> size : {std::array<int, 3>{1, 1, 1}, {1, 7, 3}, {13, 1, 5}, {8, 8, 8}, {9, 17, 33},
+                                        {1625, 1621, 1630}}) {
+    VoxelBricks bricks;
+    bricks.reset(size);
+    const std::size_t nx = std::size_t(size[0]), ny = std::size_t(size[1]), n = nx * ny * std::size_t(size[2]);
+    std::mt19937_64 rng(3);
+    std::vector<std::size_t> probe;
+    if (n <= 6000) {
+      for (std::size_t c = 0; c < n; ++c) probe.push_back(c);
+    } else {
+      for (int t = 0; t < 200000; ++t) probe.push_back(rng() % n);
+      for (std::size_t c : {std::size_t(0), nx - 1, nx, nx * ny - 1, nx * ny, n - 1}) probe.push_back(c);
+    }
+    for (std::size_t c : probe) {
+      const auto v = bricks.ijk(c);
+      ASSERT_EQ(v[0], int(c % nx)) << c;
+      ASSERT_EQ(v[1], int(c / nx % ny)) << c;
+      ASSERT_EQ(v[2], int(c / (nx * ny))) << c;
+    }
+    if (n > 6000) continue;
+    for (std::size_t c = 0; c < n; ++c) ASSERT_EQ(bricks.find(c).brick, nullptr); // nothing allocated yet
+    for (std::size_t c = 0; c < n; ++c) {
+      const VoxelBricks::Cell t = bricks.touch(c, {}), f = bricks.find(c);
+      ASSERT_EQ(t.brick, f.brick);
+      ASSERT_EQ(t.local, f.local);
+    }
+    // Every voxel has its own (brick, place); each neighbour step lands on the neighbour's own.
+    std::vector<std::pair<const void*, int>> seen;
+    for (std::size_t c = 0; c < n; ++c) seen.push_back({bricks.find(c).brick, bricks.find(c).local});
+    std::sort(seen.begin(), seen.end());
+    ASSERT_EQ(std::unique(seen.begin(), seen.end()), seen.end());
+    for (std::size_t c = 0; c < n; ++c) {
+      const auto v = bricks.ijk(c);
+      for (int a = 0; a < 3; ++a)
+        for (int sign : {-1, 1}) {
+          std::array<int, 3> w = v;
+          w[std::size_t(a)] += sign;
+          if (w[std::size_t(a)] < 0 || w[std::size_t(a)] >= size[std::size_t(a)]) continue;
+          const VoxelBricks::Cell got = bricks.neighbour(bricks.find(c), v, a, sign);
+          const VoxelBricks::Cell want = bricks.find(std::size_t(w[0]) + nx * (std::size_t(w[1]) + ny * std::size_t(w[2])));
+          ASSERT_EQ(got.brick, want.brick);
+          ASSERT_EQ(got.local, want.local);
+        }
+    }
+    ASSERT_EQ(bricks.allocated(), std::size_t((size[0] + 7) / 8) * std::size_t((size[1] + 7) / 8) * std::size_t((size[2] + 7) / 8));
+  }
+}
+
+TEST(VoxelDarcyFilling, MemoryFollowsTheCementNotTheRegion) {
+  // The same 24^3 medium alone and in the middle of a 72^3 region (offset 24: the same brick boundaries).
+  const VoxelMedium small = heterogeneous(24, 7);
+  const VoxelMedium large = embedded(small, 8);
+  VoxelDarcyFilling a(small), b(large);
+  for (VoxelDarcyFilling* f : {&a, &b}) {
+    f->setSource(Eigen::Vector3d::Zero(), 1.05e-3);
+    f->setViscosity(kMu);
+    inject(*f, kQ, 0.03e-6); // 30 mm^3
+  }
+  // The bricks the cement and its front touched, counted here: those holding a voxel with cement or an open
+  // face neighbour of a filled voxel (the front of the next step; a front voxel is open).
+  auto touched = [](const VoxelDarcyFilling& f, bool withFront) {
+    const VoxelMedium& m = f.medium();
+    std::vector<std::array<int, 3>> bricks;
+    auto add = [&](int i, int j, int k) { bricks.push_back({i / 8, j / 8, k / 8}); };
+    for (std::size_t c : f.wetVoxels()) {
+      const auto v = m.ijk(c);
+      add(v[0], v[1], v[2]);
+      if (!withFront || !f.filled(c)) continue;
+      for (int axis = 0; axis < 3; ++axis)
+        for (int sign : {-1, 1}) {
+          std::array<int, 3> w = v;
+          w[std::size_t(axis)] += sign;
+          if (w[std::size_t(axis)] < 0 || w[std::size_t(axis)] >= m.size[std::size_t(axis)]) continue;
+          if (m.porosity[m.index(w[0], w[1], w[2])] > 0) add(w[0], w[1], w[2]);
+        }
+    }
+    std::sort(bricks.begin(), bricks.end());
+    return std::size_t(std::unique(bricks.begin(), bricks.end()) - bricks.begin());
+  };
+  const std::size_t lower = touched(b, false), upper = touched(b, true);
+  std::printf("bricks: %zu (wet voxels' %zu, with the front %zu) in both regions; %zu kB against %zu kB of dense "
+              "per-voxel arrays (51 bytes a voxel) over the 72^3 region\n",
+              b.statistics().bricks, lower, upper, b.statistics().brickBytes / 1024, large.count() * 51 / 1024);
+  EXPECT_GT(b.wetVoxels().size(), 100u);
+  EXPECT_EQ(a.statistics().bricks, b.statistics().bricks);
+  EXPECT_GE(b.statistics().bricks, lower);
+  EXPECT_LE(b.statistics().bricks, upper);
+  EXPECT_LT(double(b.statistics().brickBytes), 0.05 * double(large.count()) * 51.0);
 }
 
 } // namespace

@@ -28,8 +28,11 @@
 //    volume is kept exactly (to round-off).
 //  * Cost scales with the cement, not the region (issue 23): every per-step pass (numbering, assembly,
 //    front search, fluxes, volume sum, viscosity update) runs over the filled voxels and their front only
-//    (lists kept as the cement grows). What remains in proportion to the region: the constructor's check
-//    of the medium and the per-voxel arrays the accessors below return (their memory, not per-step time).
+//    (lists kept as the cement grows), and the per-voxel state (fill, pressure, viscosity, arrival time,
+//    face fluxes, numbering) lives in bricks of 8^3 voxels allocated when the cement first comes next to
+//    them (VoxelBricks), so its memory follows the cement too. What remains in proportion to the region:
+//    the constructor's check of the medium, the medium itself (the caller's), a brick directory of 4 bytes
+//    per 512 voxels, and a caller's own dense copy of an accessor (operator std::vector).
 #pragma once
 
 #include <Eigen/Core>
@@ -38,6 +41,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -111,6 +115,117 @@ private:
   std::vector<double> lowerValue_, upperValue_, diagonalValue_, previous_, next_; // a_i,i-1 and a_i,i+1 (or 0)
 };
 
+// The filling's per-voxel state in bricks of 8 x 8 x 8 voxels, allocated when first written (the cement or
+// its front reaching them) and initialised to the values a voxel the cement never reached has. A 7.5 M voxel
+// region with 50 k voxels of cement holds a few hundred bricks (28 kB each) and a directory of 4 bytes per
+// brick, instead of 51 bytes per region voxel.
+class VoxelBricks {
+public:
+  static constexpr int kEdgeBits = 3, kEdge = 1 << kEdgeBits, kVoxels = kEdge * kEdge * kEdge;
+  // One voxel's state together (56 bytes): a pass reads several fields of a voxel and its neighbours at
+  // once, and field arrays 4 kB apart in a brick would meet in the same cache sets.
+  struct Voxel {
+    double fill = 0, pressure = 0, viscosity = 1, arrival = -1;
+    float faceFlux[3] = {0, 0, 0}; // (+x, +y, +z) faces of the last solve [m^3/s]
+    int unknown = -1;              // row of the pressure system, or -1
+    std::uint8_t filled = 0, barred = 0, inFront = 0;
+  };
+  struct Brick {
+    Voxel voxel[kVoxels]; // local index (k % 8) * 64 + (j % 8) * 8 + i % 8
+  };
+  struct Cell {
+    Brick* brick = nullptr; // null: a brick not allocated (every value at its initial one)
+    int local = 0;
+    Voxel* operator->() const { return &brick->voxel[local]; }
+  };
+  void reset(const std::array<int, 3>& size);
+  // The voxel (i, j, k) (inside the region): shifts and masks only, what the per-step passes use.
+  Cell find(int i, int j, int k) const {
+    const std::int32_t at = directory_[std::size_t(k >> kEdgeBits) * bricksXY_ + std::size_t(j >> kEdgeBits) * bricksX_ +
+                                       std::size_t(i >> kEdgeBits)];
+    const int local = ((k & (kEdge - 1)) << (2 * kEdgeBits)) | ((j & (kEdge - 1)) << kEdgeBits) | (i & (kEdge - 1));
+    return {at < 0 ? nullptr : bricks_[std::size_t(at)].get(), local};
+  }
+  Cell find(std::size_t c) const {
+    const std::array<int, 3> v = ijk(c);
+    return find(v[0], v[1], v[2]);
+  }
+  // VoxelMedium::ijk without its two divisions where the index fits 32 bits: a multiply by a precomputed
+  // inverse (Lemire, Kaser & Kurz 2019, Softw. Pract. Exp. 49:953, exact for 32-bit dividends and divisors).
+  std::array<int, 3> ijk(std::size_t c) const {
+    if (c <= 0xffffffffu) {
+      const std::uint32_t r = quotient(std::uint32_t(c), inverseX_, std::uint32_t(size_[0]));
+      const std::uint32_t k = quotient(r, inverseY_, std::uint32_t(size_[1]));
+      return {int(std::uint32_t(c) - r * std::uint32_t(size_[0])), int(r - k * std::uint32_t(size_[1])), int(k)};
+    }
+    const std::size_t nx = std::size_t(size_[0]), ny = std::size_t(size_[1]), r = c / nx;
+    return {int(c % nx), int(r % ny), int(r / ny)};
+  }
+  // The neighbour of the voxel at `v` in `own` (allocated) one step along `axis` (0-2) by `sign` (+-1), inside
+  // the region: in the same brick unless `v` is on the brick's side.
+  Cell neighbour(const Cell& own, const std::array<int, 3>& v, int axis, int sign) const {
+    const int shift = axis * kEdgeBits, along = (own.local >> shift) & (kEdge - 1);
+    if (sign > 0 ? along != kEdge - 1 : along != 0) return {own.brick, own.local + sign * (1 << shift)};
+    std::array<int, 3> w = v;
+    w[std::size_t(axis)] += sign;
+    return find(w[0], w[1], w[2]);
+  }
+  // The voxel's brick, allocated (viscosity from `initialViscosity` when not empty, else 1) if it was not.
+  Cell touch(std::size_t c, const std::vector<double>& initialViscosity);
+  std::size_t allocated() const { return bricks_.size(); }
+  std::size_t bytes() const { return bricks_.size() * sizeof(Brick) + directory_.size() * sizeof(std::int32_t); }
+  // f(voxel, brick, local) over the voxels of the allocated bricks that lie in the region
+  template <class F> void forEachVoxel(F&& f) const {
+    for (std::size_t b = 0; b < bricks_.size(); ++b)
+      for (int local = 0; local < kVoxels; ++local) {
+        const int i = origin_[b][0] + (local & (kEdge - 1)), j = origin_[b][1] + ((local >> kEdgeBits) & (kEdge - 1)),
+                  k = origin_[b][2] + (local >> (2 * kEdgeBits));
+        if (i >= size_[0] || j >= size_[1] || k >= size_[2]) continue;
+        f(std::size_t(i) + std::size_t(size_[0]) * (std::size_t(j) + std::size_t(size_[1]) * std::size_t(k)), *bricks_[b], local);
+      }
+  }
+
+private:
+  __extension__ typedef unsigned __int128 Wide;
+  static std::uint32_t quotient(std::uint32_t n, std::uint64_t inverse, std::uint32_t d) {
+    return d == 1 ? n : std::uint32_t((Wide(inverse) * n) >> 64);
+  }
+  std::array<int, 3> size_{0, 0, 0};
+  std::uint64_t inverseX_ = 0, inverseY_ = 0; // 2^64 / n + 1 for n = size x, size y (unused when n is 1)
+  std::size_t bricksX_ = 0, bricksXY_ = 0;
+  std::vector<std::int32_t> directory_; // per brick of the region: its index in bricks_, or -1
+  std::vector<std::unique_ptr<Brick>> bricks_;
+  std::vector<std::array<int, 3>> origin_; // first voxel of each allocated brick
+};
+
+// A read-only view of one per-voxel field of the filling, indexed by voxel like the dense vector it
+// replaces (voxels the cement never came near read their initial value). operator std::vector makes the
+// dense copy, region-sized, for a caller that wants one.
+template <class T> class VoxelField {
+public:
+  using Member = T VoxelBricks::Voxel::*;
+  VoxelField(const VoxelBricks* bricks, Member member, std::size_t count, T initial, const std::vector<T>* dense = nullptr)
+      : bricks_(bricks), member_(member), count_(count), initial_(initial), dense_(dense) {}
+  T operator[](std::size_t c) const {
+    const VoxelBricks::Cell cell = bricks_->find(c);
+    if (cell.brick) return cell.brick->voxel[cell.local].*member_;
+    return dense_ && !dense_->empty() ? (*dense_)[c] : initial_;
+  }
+  std::size_t size() const { return count_; }
+  operator std::vector<T>() const {
+    std::vector<T> v(count_);
+    for (std::size_t c = 0; c < count_; ++c) v[c] = (*this)[c];
+    return v;
+  }
+
+private:
+  const VoxelBricks* bricks_;
+  Member member_;
+  std::size_t count_;
+  T initial_;
+  const std::vector<T>* dense_;
+};
+
 struct FillingSettings {
   double maxFillPerStep = 1.0;   // largest overshoot of a voxel beyond full in one step, of its pore volume (excess moves on)
   double solverTolerance = 1e-6;  // conjugate gradient relative residual (1e-8 moved the 5 ml phantom run by < 0.01 %)
@@ -123,6 +238,7 @@ struct FillingStatistics {
   double worstResidual = 0.0, solveSeconds = 0.0, assemblySeconds = 0.0;
   std::size_t lastUnknowns = 0, lastFrontVoxels = 0;
   std::size_t capillaryRounds = 0; // solves of the capillary entry's open/barred iteration
+  std::size_t bricks = 0, brickBytes = 0; // per-voxel state allocated (VoxelBricks), after the last step
 };
 
 // A run that cannot go on (the pore space connected to the source is full; a solve that diverges).
@@ -169,12 +285,20 @@ public:
   double time() const { return time_; }
   double injectedVolume() const { return injected_; }    // [m^3]
   double cementVolume() const;                           // sum of f phi V over the voxels [m^3]
-  const std::vector<double>& fill() const { return fill_; }
-  const std::vector<double>& pressure() const { return pressure_; } // [Pa]; front voxels p_front, empty 0
+  // Per-voxel fields, indexed by voxel (VoxelField: voxels the cement never came near read their initial value).
+  VoxelField<double> fill() const { return {&bricks_, &VoxelBricks::Voxel::fill, medium_.count(), 0.0}; }
+  // [Pa]; front voxels p_front, empty 0
+  VoxelField<double> pressure() const { return {&bricks_, &VoxelBricks::Voxel::pressure, medium_.count(), 0.0}; }
   // Current on the voxels holding cement and the front (elsewhere the value they last had there, or 1).
-  const std::vector<double>& viscosity() const { return viscosity_; }
-  const std::vector<double>& arrivalTime() const { return arrival_; } // first cement in the voxel [s]; -1 none
-  bool filled(std::size_t c) const { return state_[c] == kFilled; }
+  VoxelField<double> viscosity() const {
+    return {&bricks_, &VoxelBricks::Voxel::viscosity, medium_.count(), 1.0, &voxelViscosity_};
+  }
+  // first cement in the voxel [s]; -1 none
+  VoxelField<double> arrivalTime() const { return {&bricks_, &VoxelBricks::Voxel::arrival, medium_.count(), -1.0}; }
+  bool filled(std::size_t c) const {
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    return cell.brick && cell->filled;
+  }
   const std::vector<std::size_t>& sourceVoxels() const { return source_; }
   // Every voxel cement has reached, in order of arrival (a superset of those with fill > 0): what a caller
   // visits to walk the cement in time proportional to it, not to the region.
@@ -194,7 +318,31 @@ public:
 private:
   enum : std::uint8_t { kClosed = 0, kEmpty = 1, kFilled = 2 };
   double poreVolume(std::size_t c) const { return double(medium_.porosity[c]) * voxelVolume_; }
-  double mobility(std::size_t c) const { return medium_.permeability[c] / viscosity_[c]; }
+  // closed: impermeable (porosity 0); filled: in its brick; else empty (a pore voxel without or with some cement)
+  std::uint8_t state(std::size_t c, const VoxelBricks::Cell& cell) const {
+    return medium_.porosity[c] <= 0 ? kClosed : cell.brick && cell->filled ? kFilled : kEmpty;
+  }
+  std::uint8_t state(std::size_t c) const { return state(c, bricks_.find(c)); }
+  double viscosityAt(std::size_t c, const VoxelBricks::Cell& cell) const {
+    return cell.brick ? cell->viscosity : voxelViscosity_.empty() ? 1.0 : voxelViscosity_[c];
+  }
+  double mobility(std::size_t c, const VoxelBricks::Cell& cell) const {
+    return medium_.permeability[c] / viscosityAt(c, cell);
+  }
+  VoxelBricks::Cell touch(std::size_t c) { return bricks_.touch(c, voxelViscosity_); }
+  // A front voxel held back by its capillary entry pressure this step (front voxels' bricks are allocated).
+  bool barredAt(std::size_t c) const {
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    return cell.brick && cell->barred;
+  }
+  void setBarred(std::size_t c, bool barred) {
+    const VoxelBricks::Cell cell = touch(c);
+    cell->barred = barred;
+  }
+  float faceFlux(std::size_t c, int axis) const {
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    return cell.brick ? cell->faceFlux[axis] : 0.0f;
+  }
   void depositExcess(std::size_t from, double volume);
   void updateShearViscosity();
   void markFilled(std::size_t c);
@@ -205,15 +353,12 @@ private:
   FillingSettings settings_;
   double voxelVolume_ = 0.0;
   std::array<double, 3> faceArea_{}, faceDistance_{};
-  std::vector<std::uint8_t> state_;
-  std::vector<double> fill_, pressure_, viscosity_, arrival_;
-  std::vector<float> faceFlux_; // per voxel, 3 faces (+x, +y, +z) of the last solve [m^3/s]
+  VoxelBricks bricks_;                  // fill, pressure, viscosity, arrival, face fluxes, numbering, flags
+  std::vector<double> voxelViscosity_;  // setVoxelViscosity's values (empty: not used)
   std::vector<std::size_t> source_;
   double time_ = 0.0, injected_ = 0.0;
   FillingStatistics stats_;
-  std::vector<int> unknown_; // voxel -> unknown index or -1
   std::vector<float> entryPressure_;  // per voxel [Pa]; empty: no capillary entry
-  std::vector<std::uint8_t> barred_;  // front voxel held back by its entry pressure this step
   std::vector<std::pair<std::size_t, double>> inflow_; // the last step's inflow per front voxel [m^3/s]
   std::function<double(double)> shearLaw_;
   double flowIndex_ = 1.0;
@@ -221,7 +366,11 @@ private:
   // The active set (issue 23): the filled voxels in voxel order (filled_; newlyFilled_ since the last
   // merge), the front, the voxels with cement, and those whose face fluxes were written.
   std::vector<std::size_t> filled_, newlyFilled_, front_, wet_, fluxWritten_;
-  std::vector<std::uint8_t> inFront_;
+  std::vector<VoxelBricks::Cell> filledCell_, wetCell_; // each filled_ (wet_) voxel's brick and place in it
+  std::vector<std::array<int, 3>> filledIjk_;          // and each filled_ voxel's (i, j, k)
+  std::vector<std::size_t> mergedVoxels_;              // step's merge of newlyFilled_ into filled_ (buffers)
+  std::vector<VoxelBricks::Cell> mergedCells_;
+  std::vector<std::array<int, 3>> mergedIjk_;
   bool uniformViscosity_ = true; // every voxel's viscosity is viscosityValue_ (setViscosity)
   double viscosityValue_ = 1.0;
   PressureSystem system_;
