@@ -325,13 +325,13 @@ int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
   record.pictureSeconds = secondsSince(t);
   record.pictures = pictures.written();
   if (const auto backend = rendering::lastRenderBackend()) record.renderBackend = rendering::renderBackendName(*backend);
-  record.totalSeconds = secondsSince(start);
+  record.totalSeconds = secondsSince(start) + a.projectedSeconds; // with the projections made beforehand
   nlohmann::json metrics = drr::xrayMetricsJson(record);
   metrics["provenance"] = provenance::toJson();
   imaging::writeTextAtomically((dir / "metrics.json").string(), metrics.dump(2) + "\n");
   staged.publish({"sequence_drr_####.nrrd", "sequence_drr_####.png", "reference_drr_####.nrrd",
                   "reference_drr_####.png"});
-  record.totalSeconds = secondsSince(start);
+  record.totalSeconds = secondsSince(start) + a.projectedSeconds;
   if (metricsOut) *metricsOut = std::move(metrics);
   printSummary(a, run, record);
   return pictures.status();
