@@ -112,6 +112,18 @@ nlohmann::json uniformScene(double mu) {
   return {{"tip_mm", {6, 6, 6}}, {"volume_ml", 0.1}, {"viscosity_pa_s", mu}, {"particle_radius_mm", 0.15},
           {"cannula_wall", false}, {"pore_permeability_m2", 1e-9}, {"snapshot_interval_s", 0.1}};
 }
+
+// 0.05 ml injected 0.15 mm above a solid plate: the uniform 40^3 cube of 0.3 mm voxels with voxels
+// firstK..19 solid (z up to 5.85 mm; firstK 0: a half space, 19: one voxel thick with open pore below it).
+Outcome runAbovePlate(int firstK) {
+  auto ct = uniform(40, 0.3);
+  for (int k = firstK; k < 20; ++k)
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 40; ++i) ct->SetPixel({{i, j, k}}, 1000.f);
+  nlohmann::json scene = uniformScene(100.0);
+  scene["volume_ml"] = 0.05;
+  return run(ct, scene);
+}
 } // namespace
 
 TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
@@ -177,13 +189,7 @@ TEST(ParticleDarcy, AHemisphereOnAnImpermeablePlane) {
   // Solid below z = 5.85 mm (voxels k < 20 of 0.3 mm), the tip at 6.0 mm: the cement is the hemisphere of
   // the injected volume about the plane's point below the tip, R_h = 2^(1/3) R (R the free sphere's), its
   // mean distance from that point 3 R_h / 4.
-  auto ct = uniform(40, 0.3);
-  for (int k = 0; k < 20; ++k)
-    for (int j = 0; j < 40; ++j)
-      for (int i = 0; i < 40; ++i) ct->SetPixel({{i, j, k}}, 1000.f);
-  nlohmann::json scene = uniformScene(100.0);
-  scene["volume_ml"] = 0.05;
-  const Outcome r = run(ct, scene);
+  const Outcome r = runAbovePlate(0);
   auto* pts = r.result.particles.GetPointer();
   double mean = 0;
   std::size_t below = 0;
@@ -212,13 +218,7 @@ TEST(ParticleDarcy, AHemisphereOnAnImpermeablePlane) {
 // The same figures are asserted for the thick half space, so the oracle is checked where no strut is thin.
 TEST(ParticleDarcy, NoPressureCouplingCrossesAOneVoxelPlate) {
   for (const bool thin : {false, true}) {
-    auto ct = uniform(40, 0.3);
-    for (int k = thin ? 19 : 0; k < 20; ++k)
-      for (int j = 0; j < 40; ++j)
-        for (int i = 0; i < 40; ++i) ct->SetPixel({{i, j, k}}, 1000.f);
-    nlohmann::json scene = uniformScene(100.0);
-    scene["volume_ml"] = 0.05;
-    const Outcome r = run(ct, scene);
+    const Outcome r = runAbovePlate(thin ? 19 : 0);
     auto* pts = r.result.particles.GetPointer();
     auto* pa = pts->GetPointData()->GetArray("pressure_pa");
     const double V = 0.05e-6, mu = 100, Q = 0.05e-6, k = 1e-9;

@@ -948,22 +948,20 @@ private:
     const double wd = kernel_.w(d_);
     std::vector<Eigen::Vector3d> gradC(n);
     for (std::size_t i = 0; i < n; ++i) gradC[i] = closedGradC_[i];
-    for (std::size_t q = 0; q < pairI_.size(); ++q) {
-      const std::size_t i = std::size_t(pairI_[q]), j = std::size_t(pairJ_[q]);
-      const Eigen::Vector3d r = x_[j] - x_[i];
-      const double ratio = kernel_.w(r.norm()) / wd;
-      const double w = pairF_[q] * (1 + 0.2 * ratio * ratio * ratio * ratio);
-      gradC[i] += omega_[j] * w * r, gradC[j] -= omega_[i] * w * r;
-    }
+    // Lind's concentration gradient over a pair list (its F/r), each pair once.
+    auto addPairs = [&](const std::vector<int>& is, const std::vector<int>& js, const std::vector<double>& fs) {
+      for (std::size_t q = 0; q < is.size(); ++q) {
+        const std::size_t i = std::size_t(is[q]), j = std::size_t(js[q]);
+        const Eigen::Vector3d r = x_[j] - x_[i];
+        const double ratio = kernel_.w(r.norm()) / wd;
+        const double w = fs[q] * (1 + 0.2 * ratio * ratio * ratio * ratio);
+        gradC[i] += omega_[j] * w * r, gradC[j] -= omega_[i] * w * r;
+      }
+    };
+    addPairs(pairI_, pairJ_, pairF_);
     // A neighbour behind a thin strut occupies space as the strut does (the closed voxels count as occupied
     // here too): the shifting keeps it, so the strut's two sides pack alike; only the flux ignores it.
-    for (std::size_t q = 0; q < hiddenI_.size(); ++q) {
-      const std::size_t i = std::size_t(hiddenI_[q]), j = std::size_t(hiddenJ_[q]);
-      const Eigen::Vector3d r = x_[j] - x_[i];
-      const double ratio = kernel_.w(r.norm()) / wd;
-      const double w = hiddenF_[q] * (1 + 0.2 * ratio * ratio * ratio * ratio);
-      gradC[i] += omega_[j] * w * r, gradC[j] -= omega_[i] * w * r;
-    }
+    addPairs(hiddenI_, hiddenJ_, hiddenF_);
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Vector3d shift = -kShiftA * kernel_.h * u_[i].norm() * dt * gradC[i];
       if (ghostF_[i] > 0 && ghostNormal_[i].norm() > 0) {
