@@ -458,11 +458,10 @@ void VoxelDarcyFilling::wet(std::size_t c) {
 }
 
 void VoxelDarcyFilling::findFront() {
-  for (std::size_t c : front_) {
-    const VoxelBricks::Cell cell = bricks_.find(c);
-    cell->inFront = 0;
-  }
+  for (const VoxelBricks::Cell& cell : frontCell_) cell->inFront = 0;
   front_.clear();
+  frontCell_.clear();
+  const bool uniform = uniformViscosity_ && !shearLaw_;
   const int nx = medium_.size[0], ny = medium_.size[1];
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
   for (std::size_t row = 0; row < filled_.size(); ++row) {
@@ -478,15 +477,12 @@ void VoxelDarcyFilling::findFront() {
         if (!cell.brick) cell = touch(m); // the front's state lives in bricks too
         if (cell->filled || cell->inFront) continue;
         cell->inFront = 1;
+        if (uniform) cell->viscosity = viscosityValue_;
         front_.push_back(m);
+        frontCell_.push_back(cell);
       }
   }
   std::sort(front_.begin(), front_.end());
-  if (uniformViscosity_ && !shearLaw_)
-    for (std::size_t m : front_) {
-      const VoxelBricks::Cell cell = bricks_.find(m);
-      cell->viscosity = viscosityValue_;
-    }
 }
 
 // Volume beyond a voxel's pore volume moves on to the nearest unfilled pore voxels, reached through
@@ -685,12 +681,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   };
   // Face fluxes of the last solve (velocities, shear rates), signed along +axis; a front link's is its inflow.
   auto faceFluxes = [&]() {
-    for (std::size_t c : fluxWritten_) {
-      const VoxelBricks::Cell cell = bricks_.find(c);
+    for (const VoxelBricks::Cell& cell : fluxWritten_)
       for (int a = 0; a < 3; ++a) cell->faceFlux[a] = 0.0f;
-    }
-    fluxWritten_ = filled_;
-    fluxWritten_.insert(fluxWritten_.end(), front_.begin(), front_.end());
+    fluxWritten_ = filledCell_;
+    fluxWritten_.insert(fluxWritten_.end(), frontCell_.begin(), frontCell_.end());
     for (std::size_t row = 0; row < filled_.size(); ++row) {
       const std::size_t c = filled_[row];
       const VoxelBricks::Cell own = filledCell_[row];

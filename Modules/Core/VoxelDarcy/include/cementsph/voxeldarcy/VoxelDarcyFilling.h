@@ -365,8 +365,10 @@ private:
   int picardIterations_ = 1;
   // The active set (issue 23): the filled voxels in voxel order (filled_; newlyFilled_ since the last
   // merge), the front, the voxels with cement, and those whose face fluxes were written.
-  std::vector<std::size_t> filled_, newlyFilled_, front_, wet_, fluxWritten_;
+  std::vector<std::size_t> filled_, newlyFilled_, front_, wet_;
   std::vector<VoxelBricks::Cell> filledCell_, wetCell_; // each filled_ (wet_) voxel's brick and place in it
+  std::vector<VoxelBricks::Cell> frontCell_;            // the front's, in the order found (not front_'s)
+  std::vector<VoxelBricks::Cell> fluxWritten_;          // the voxels whose face fluxes were written
   std::vector<std::array<int, 3>> filledIjk_;          // and each filled_ voxel's (i, j, k)
   std::vector<std::size_t> mergedVoxels_;              // step's merge of newlyFilled_ into filled_ (buffers)
   std::vector<VoxelBricks::Cell> mergedCells_;
