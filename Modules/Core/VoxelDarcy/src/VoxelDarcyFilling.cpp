@@ -440,7 +440,7 @@ Eigen::Vector3d VoxelDarcyFilling::darcyVelocity(std::size_t c) const {
 
 void VoxelDarcyFilling::markFilled(std::size_t c) {
   const VoxelBricks::Cell cell = touch(c);
-  cell->filled = 1;
+  cell.set(VoxelBricks::kFilledFlag, 1);
   cell->fill = 1.0;
   cell->pressure = settings_.frontPressurePa; // warm start: the front's pressure, where it was
   if (uniformViscosity_ && !shearLaw_) cell->viscosity = viscosityValue_;
@@ -454,11 +454,11 @@ void VoxelDarcyFilling::wet(std::size_t c) {
   wet_.push_back(c);
   wetCell_.push_back(cell);
   // (a shear-thinning run's front voxels already have their upstream viscosity)
-  if (uniformViscosity_ && (!shearLaw_ || !cell->inFront)) cell->viscosity = viscosityValue_;
+  if (uniformViscosity_ && (!shearLaw_ || !cell.has(VoxelBricks::kInFrontFlag))) cell->viscosity = viscosityValue_;
 }
 
 void VoxelDarcyFilling::findFront() {
-  for (const VoxelBricks::Cell& cell : frontCell_) cell->inFront = 0;
+  for (const VoxelBricks::Cell& cell : frontCell_) cell.set(VoxelBricks::kInFrontFlag, 0);
   front_.clear();
   frontCell_.clear();
   const bool uniform = uniformViscosity_ && !shearLaw_;
@@ -475,8 +475,8 @@ void VoxelDarcyFilling::findFront() {
         if (medium_.porosity[m] <= 0) continue; // closed
         VoxelBricks::Cell cell = bricks_.neighbour(filledCell_[row], v, a, sign);
         if (!cell.brick) cell = touch(m); // the front's state lives in bricks too
-        if (cell->filled || cell->inFront) continue;
-        cell->inFront = 1;
+        if (cell.has(VoxelBricks::kFilledFlag) || cell.has(VoxelBricks::kInFrontFlag)) continue;
+        cell.set(VoxelBricks::kInFrontFlag, 1);
         if (uniform) cell->viscosity = viscosityValue_;
         front_.push_back(m);
         frontCell_.push_back(cell);
@@ -617,10 +617,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
         if (medium_.porosity[m] <= 0) continue; // closed
         // an open neighbour of a filled voxel is filled or on the front: its brick is allocated
         const VoxelBricks::Cell cell = bricks_.neighbour(own, v, axis, sign);
-        if (cell->barred) continue;
+        if (cell.has(VoxelBricks::kBarredFlag)) continue;
         const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
         const double lm = mobility(m, cell);
-        if (cell->filled) {
+        if (cell.has(VoxelBricks::kFilledFlag)) {
           const double t = area * 2.0 * lc * lm / ((lc + lm) * dist); // harmonic mean mobility
           diagonal += t;
           inner[nnz] = cell->unknown;
@@ -712,7 +712,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   if (capillary)
     for (std::size_t m : front) {
       const VoxelBricks::Cell cell = bricks_.find(m);
-      cell->barred = upstreamPressure(m) <= frontPressure(m);
+      cell.set(VoxelBricks::kBarredFlag, upstreamPressure(m) <= frontPressure(m));
     }
   for (int pass = 0; pass < (unknowns > 0 ? picardIterations_ : 0); ++pass) {
     if (shearLaw_) updateShearViscosity();

@@ -117,26 +117,33 @@ private:
 
 // The filling's per-voxel state in bricks of 8 x 8 x 8 voxels, allocated when first written (the cement or
 // its front reaching them) and initialised to the values a voxel the cement never reached has. A 7.5 M voxel
-// region with 50 k voxels of cement holds a few hundred bricks (28 kB each) and a directory of 4 bytes per
+// region with 50 k voxels of cement holds a few hundred bricks (29 kB each) and a directory of 4 bytes per
 // brick, instead of 51 bytes per region voxel.
 class VoxelBricks {
 public:
   static constexpr int kEdgeBits = 3, kEdge = 1 << kEdgeBits, kVoxels = kEdge * kEdge * kEdge;
-  // One voxel's state together (56 bytes): a pass reads several fields of a voxel and its neighbours at
-  // once, and field arrays 4 kB apart in a brick would meet in the same cache sets.
+  // One voxel's values together (56 bytes): a pass reads several of a voxel and its neighbours at once,
+  // and field arrays 4 kB apart in a brick would meet in the same cache sets. The flags, which the front
+  // search and the assembly test for every neighbour, are kept apart, a byte a voxel (their working set
+  // is then that of a dense byte array, not 56 bytes a voxel).
   struct Voxel {
     double fill = 0, pressure = 0, viscosity = 1, arrival = -1;
     float faceFlux[3] = {0, 0, 0}; // (+x, +y, +z) faces of the last solve [m^3/s]
     int unknown = -1;              // row of the pressure system, or -1
-    std::uint8_t filled = 0, barred = 0, inFront = 0;
   };
+  enum : std::uint8_t { kFilledFlag = 1, kBarredFlag = 2, kInFrontFlag = 4 };
   struct Brick {
-    Voxel voxel[kVoxels]; // local index (k % 8) * 64 + (j % 8) * 8 + i % 8
+    std::uint8_t flags[kVoxels] = {}; // kFilledFlag | kBarredFlag | kInFrontFlag
+    Voxel voxel[kVoxels];             // local index (k % 8) * 64 + (j % 8) * 8 + i % 8
   };
   struct Cell {
     Brick* brick = nullptr; // null: a brick not allocated (every value at its initial one)
     int local = 0;
     Voxel* operator->() const { return &brick->voxel[local]; }
+    bool has(std::uint8_t flag) const { return brick->flags[local] & flag; }
+    void set(std::uint8_t flag, bool on) const {
+      brick->flags[local] = std::uint8_t(on ? brick->flags[local] | flag : brick->flags[local] & ~flag);
+    }
   };
   void reset(const std::array<int, 3>& size);
   // The voxel (i, j, k) (inside the region): shifts and masks only, what the per-step passes use.
@@ -297,7 +304,7 @@ public:
   VoxelField<double> arrivalTime() const { return {&bricks_, &VoxelBricks::Voxel::arrival, medium_.count(), -1.0}; }
   bool filled(std::size_t c) const {
     const VoxelBricks::Cell cell = bricks_.find(c);
-    return cell.brick && cell->filled;
+    return cell.brick && cell.has(VoxelBricks::kFilledFlag);
   }
   const std::vector<std::size_t>& sourceVoxels() const { return source_; }
   // Every voxel cement has reached, in order of arrival (a superset of those with fill > 0): what a caller
@@ -320,7 +327,7 @@ private:
   double poreVolume(std::size_t c) const { return double(medium_.porosity[c]) * voxelVolume_; }
   // closed: impermeable (porosity 0); filled: in its brick; else empty (a pore voxel without or with some cement)
   std::uint8_t state(std::size_t c, const VoxelBricks::Cell& cell) const {
-    return medium_.porosity[c] <= 0 ? kClosed : cell.brick && cell->filled ? kFilled : kEmpty;
+    return medium_.porosity[c] <= 0 ? kClosed : cell.brick && cell.has(VoxelBricks::kFilledFlag) ? kFilled : kEmpty;
   }
   std::uint8_t state(std::size_t c) const { return state(c, bricks_.find(c)); }
   double viscosityAt(std::size_t c, const VoxelBricks::Cell& cell) const {
@@ -333,11 +340,11 @@ private:
   // A front voxel held back by its capillary entry pressure this step (front voxels' bricks are allocated).
   bool barredAt(std::size_t c) const {
     const VoxelBricks::Cell cell = bricks_.find(c);
-    return cell.brick && cell->barred;
+    return cell.brick && cell.has(VoxelBricks::kBarredFlag);
   }
   void setBarred(std::size_t c, bool barred) {
     const VoxelBricks::Cell cell = touch(c);
-    cell->barred = barred;
+    cell.set(VoxelBricks::kBarredFlag, barred);
   }
   float faceFlux(std::size_t c, int axis) const {
     const VoxelBricks::Cell cell = bricks_.find(c);
