@@ -6,8 +6,8 @@
 //    interpolation. The result has identity direction, the permuted spacing, and as origin the physical
 //    position of its first voxel; every voxel keeps its value and its physical centre (to the 1e-6 of the
 //    matrix times the CT's extent), so results equal the axial series'.
-//  * truly oblique (any other rotation): resampled onto an axis-aligned grid: isotropic voxels of the CT's
-//    smallest spacing, covering the CT's whole box, trilinear interpolation (imaging::resampleOnto), and
+//  * truly oblique (any other rotation): resampled onto an axis-aligned grid: each patient axis at the spacing of
+//    the CT axis most nearly along it, covering the CT's whole box, trilinear interpolation (imaging::resampleOnto), and
 //    -1000 HU (air) outside the scan.
 // Everything after that (tip, results, simulated CT) is in the CT's patient frame in mm, as for an axial CT.
 #pragma once
