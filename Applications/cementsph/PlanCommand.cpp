@@ -158,7 +158,8 @@ int runPlan(const PlanArgs& a) {
       marks.direction = {r.direction.x(), r.direction.y(), r.direction.z()};
       for (const auto& site : run.summary.leakageSites)
         marks.leaks.push_back({{site.positionMm, site.siteClass}, site.volumeMl});
-      // The vertebra the run judged leakage by (--labels or the bone rule: best/anatomy_labels.nrrd), outlined.
+      // The vertebra the run judged leakage by (--labels or the bone rule; the result's, as best/anatomy_labels.nrrd
+      // holds it), outlined.
       const auto vertebra = run.anatomyLabelsFile ? imaging::toVtk(run.anatomyLabelsFile.GetPointer()) : nullptr;
       marks.vertebraMask = vertebra;
       marks.vertebraLabel = 1; // anatomy::TissueClass::TargetVertebra
