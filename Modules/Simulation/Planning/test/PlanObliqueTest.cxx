@@ -1,8 +1,9 @@
 // plan on an oblique series (issue 20 item 5: "oblique scans plan as fast as axial ones"): the vertebra
 // phantom and a copy of it on a grid tilted 20 degrees about x (a gantry tilt; the same physical object,
 // sampled trilinearly), planned with the same request. The plan aligns the oblique CT once, not once per
-// injection, so the tilted plan costs what its injections cost (its aligned grid has 1 mm voxels over the
-// tilted box: more voxels than the axial 1 x 1 x 1.5 mm grid, which bounds how close to 1 the ratio can be).
+// injection, so the tilted plan costs what its injections cost (its aligned grid takes, along each patient axis,
+// the spacing of the CT axis nearest it, 1 x 1 x 1.5 mm here, over the tilted box: more voxels than the axial
+// grid, which bounds how close to 1 the ratio can be).
 // Oracles: the same trajectory verdict; the best plans' coverage within 0.1 of each other (the tilted CT is a
 // trilinear resampling of the axial one, so the two runs differ by the interpolation only); the wall-time ratio
 // is printed and bounded (3x, far below the 7.5x the issue measured with a resampling per injection).
@@ -97,8 +98,9 @@ void planBothWays(const phantom::VertebraOptions& o, int repeats, double maxRati
   EXPECT_LT(obliqueS, maxRatio * axialS);
 }
 
-// The bundled phantom's field (64 x 70 x 45 mm): the tilted copy's aligned grid (1 mm voxels over the tilted box,
-// 64 x 81 x 66 mm) has 2.5x the axial grid's voxels, and each injection's anatomy and region scale with them.
+// The bundled phantom's field (64 x 70 x 45 mm): the tilted copy's aligned grid (the series' own spacings over the
+// tilted box, 64 x 81 x 66 mm) has about 1.7x the axial grid's voxels, and each injection's anatomy and region
+// scale with them.
 TEST(PlanOblique, ATiltedCopyPlansAlike) { planBothWays({}, 2, 3.0); }
 
 // A clinical-size field (200 x 70 x 200 mm, 1.9 million voxels; tilted about x, so the vertebra, near the y
