@@ -15,15 +15,14 @@
 #      scripts/lsan-suppressions.txt (leaks inside them) and scripts/ubsan-suppressions.txt (UB reports inside
 #      ITK's headers; this build makes UBSan recoverable so that the runtime reads them, and halt_on_error=1
 #      keeps every other report fatal) say why for each rule and never name our code.
-# Measured on the shared 2-core machine, 2026-12-03 (GCC 12, clang 14, ccache 4.7), at load 1.5-3.7 from other
-# builds: step 1 with FUZZ_SECONDS=45 and step 2 took 188-200 s with a warm cache in CI runs (75 s of it the clang
-# build); a cold GCC build of step 3 took 26 min for its libraries and 3 of its 24 suites, then about 2.5 min per
-# suite (the suites' own sources and links) under the shared build lock; its 24 suites' tests: see README/docs.
-# A warm ccache makes step 3's build mostly linking. ccache is keyed by paths relative to the source root
-# (CCACHE_BASEDIR), so a clone at another path hits: checked with two clones, /tmp/h3-clone then /tmp/h3-clone2,
-# 45 of 45 clang compiles hit in the second. Compiles whose command line or preprocessed source holds an absolute
-# path (the suites that use CEMENTSPH_TEST_DATA_DIR or CEMENTSPH_BINARY_DIR, cementsph-all's CEMENTSPH_DATA_DIR)
-# miss in a clone at a new path.
+# Measured on the shared 2-core machine, 2026-12-03 (GCC 12, clang 14, ccache 4.7), at load 1.5-4.8 from other
+# sessions' builds: steps 1-2 took 188-200 s with FUZZ_SECONDS=45 in CI runs (75 s of it the clang build; 30 s
+# fuzzing saves 30 s). Step 3 cold (every object compiled, waiting on the shared build lock between batches): 26 min
+# for the libraries and the first 3 suites, 50 min for 10 suites; the other 14 were not finished at 16:10 UTC.
+# Its tests: the 14 suites built by then (91 tests) ran in 54 s with ctest -j2 at load 3.5-4.4 (all pass with the
+# suppressions). Estimated warm (same clone path, nothing changed): about 5 min of linking for step 3's 24 suites
+# and the program, 2 min of tests, so .ci/run about 26-27 min (build.sh about 11, ctest 5.3, steps 1-2 about 3,
+# step 3 about 7). Cold it does not fit: CI_DEADLINE stops it (below).
 # CI_DEADLINE (seconds since the epoch, set by .ci/run to 85 min after CI starts, short of its 90 min hard limit):
 # if step 3's build would run past it (a cold ccache), the stage stops with a line saying so, and fails; what was
 # compiled stays cached, so the next run continues from there.
@@ -56,7 +55,8 @@ fi
 mkdir -p "$out/obj" "$out/bin" "$out/findings"
 # ccache rewrites absolute paths under the source root to relative ones before hashing (CCACHE_BASEDIR) and leaves
 # the build folder's path out of the key of -g compiles (CCACHE_NOHASHDIR), so CI's clone at another path hits what
-# an earlier clone compiled. Objects with an absolute path in a -D (the test suites' CEMENTSPH_TEST_DATA_DIR and
+# an earlier clone compiled (checked 2026-12-03: the clang build in /tmp/h3-clone, 45 misses, then in
+# /tmp/h3-clone2, 45 of 45 hits). Objects with an absolute path in a -D that their source uses (the test suites' CEMENTSPH_TEST_DATA_DIR and
 # CEMENTSPH_BINARY_DIR, cementsph-all's CEMENTSPH_DATA_DIR) still miss in a clone at a new path, as they must.
 export CCACHE_BASEDIR="$here" CCACHE_NOHASHDIR=1
 
