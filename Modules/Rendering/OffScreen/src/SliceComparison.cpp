@@ -124,7 +124,7 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
       options.annotate ? detail::annotationMargins(options.fontPx) : detail::PanelMargins{};
   const std::string rowNames[2] = {options.postRowName, "simulated CT"};
   // Each panel's title ("post (phantom, simulated), axial z = 16.9 mm") can be wider than a small volume's panel:
-  // the right margin grows to the widest title, so no title is cut.
+  // the right margin grows to the widest title and a 16 px gap before the next, so no title is cut or runs on.
   auto titleOf = [&](std::size_t r, double zMm) {
     double direction[9];
     std::copy_n(rows[r]->GetDirectionMatrix()->GetData(), 9, direction);
@@ -135,7 +135,7 @@ void renderSliceComparison(vtkImageData* postCT, vtkImageData* simulatedCT, cons
   };
   if (options.annotate)
     for (std::size_t r = 0; r < rows.size(); ++r)
-      for (double zMm : z) m.right = std::max(m.right, detail::PixelCanvas::textSize(titleOf(r, zMm), options.fontPx)[0] + 4 - m.left - panelW);
+      for (double zMm : z) m.right = std::max(m.right, detail::PixelCanvas::textSize(titleOf(r, zMm), options.fontPx)[0] + 16 - m.left - panelW);
   const int cellW = m.left + panelW + m.right, cellH = m.top + panelH + m.bottom;
   const int width = gap + static_cast<int>(z.size()) * (cellW + gap);
   const int height = gap + static_cast<int>(rows.size()) * (cellH + gap);
