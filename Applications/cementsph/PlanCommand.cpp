@@ -101,7 +101,7 @@ void drawConvergence(const planning::PlanResult& plan, const fs::path& png) {
 }
 
 void printEvaluation(const planning::PlanEvaluation& e) {
-  std::cerr << "plan " << e.index << " (start " << e.start << "): depth " << e.depthMm << " mm, " << e.volumeMl
+  std::cerr << "plan " << e.index << " (start " << e.start << (e.volumeTrim ? ", volume trim" : "") << "): depth " << e.depthMm << " mm, " << e.volumeMl
             << " ml: coverage " << e.coverage << ", syringe " << e.syringeMpa << " MPa, leak " << e.leakageMl << " ml"
             << (e.failure.empty() ? "" : " (" + e.failure + ")") << "\n";
 }
@@ -116,6 +116,7 @@ void printSummary(const planning::PlanResult& plan, const std::string& out) {
             << ": coverage " << b.coverage << ", syringe " << b.syringeMpa << " MPa, leak " << b.leakageMl << " ml, "
             << (b.withinLimits ? "within" : "OUTSIDE") << " the limits; " << plan.evaluations.size()
             << " injections in " << plan.starts.size() << " starts"
+            << (b.volumeTrim ? " and the volume trim (from " + std::to_string(plan.searchBest.volumeMl) + " ml)" : std::string())
             << (plan.mpiRanks > 1 ? " over " + std::to_string(plan.mpiRanks) + " MPI ranks" : std::string()) << ", "
             << plan.stopReason << "; results in " << out << "\n";
 }

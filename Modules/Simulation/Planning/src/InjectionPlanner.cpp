@@ -178,7 +178,48 @@ PlanEvaluation evaluationFromJson(const nlohmann::json& j) {
   }
   e.failure = j.at("failure").is_null() ? std::string() : j.at("failure").get<std::string>();
   e.warnings = j.at("warnings").get<std::vector<std::string>>();
+  e.volumeTrim = j.at("volume_trim").get<bool>();
   return e;
+}
+
+// The volume trim (InjectionPlanner.h): at the search's best depth, bisect the volume for the smallest whose
+// coverage is within the tolerance of the best's and which keeps within the limits. Runs on the coordinator.
+void trimVolume(const imaging::ImageType* ct, const PlanRequest& r, PlanResult& result,
+                const std::function<void(const PlanEvaluation&)>& onEvaluation) {
+  const PlanEvaluation found = result.best;
+  result.searchBest = found;
+  if (!(r.trimCoverageTolerance > 0) || r.secondTip || !found.failure.empty() || !found.withinLimits) return;
+  auto injection = vtkSmartPointer<vtkSPHInjectionFilter>::New();
+  injection->SetInputDataObject(0, imaging::toVtk(ct));
+  injection->ProduceImageOutputsOff();
+  std::vector<PlanEvaluation> trims;
+  Context context{injection, &r, found.start, &trims};
+  const double wanted = found.coverage - r.trimCoverageTolerance;
+  auto enough = [&](double volumeMl) { // runs the injection; true when it keeps the coverage and the limits
+    const double x[2] = {found.depthMm, volumeMl};
+    evaluate(2, x, nullptr, &context);
+    PlanEvaluation& e = trims.back();
+    e.volumeTrim = true;
+    e.index = int(result.evaluations.size());
+    result.evaluations.push_back(e);
+    if (onEvaluation) onEvaluation(e);
+    return e.failure.empty() && e.withinLimits && e.coverage >= wanted;
+  };
+  const PlanEvaluation* smallest = &found;
+  std::size_t smallestTrim = trims.size(); // none yet
+  double low = r.minVolumeMl, high = found.volumeMl;
+  constexpr double kVolumeResolutionMl = 0.05; // BOBYQA's volume xtol
+  if (high - low > kVolumeResolutionMl && enough(low)) {
+    smallestTrim = trims.size() - 1;
+    high = low;
+  }
+  while (high - low > kVolumeResolutionMl) {
+    const double middle = 0.5 * (low + high);
+    if (enough(middle)) high = middle, smallestTrim = trims.size() - 1;
+    else low = middle;
+  }
+  if (smallestTrim < trims.size()) smallest = &result.evaluations[std::size_t(trims[smallestTrim].index)];
+  result.best = *smallest;
 }
 } // namespace
 
@@ -201,6 +242,8 @@ void PlanRequest::validate(const imaging::ImageType* ct) const {
   if (!(maxSyringeMpa > 0 && maxSyringeMpa < 100)) throw std::invalid_argument("--max-syringe-mpa must be in (0, 100) MPa");
   if (!(maxLeakageMl >= 0 && maxLeakageMl < 50)) throw std::invalid_argument("--max-leakage-ml must be in [0, 50) ml");
   if (starts < 1 || starts > 64) throw std::invalid_argument("--starts must be 1 .. 64");
+  if (!(trimCoverageTolerance >= 0 && trimCoverageTolerance <= 0.5))
+    throw std::invalid_argument("the volume trim's coverage tolerance must be in [0, 0.5] (a fraction of the target)");
   const int perStart = 2 * parameters() + 2; // BOBYQA's 2n + 1 to begin with, and one more
   if (maxEvaluations > 10000 || maxEvaluations / starts < perStart)
     throw std::invalid_argument("--max-evaluations must be at most 10000 and give each of the " +
@@ -276,6 +319,7 @@ PlanResult planInjection(const imaging::ImageType* ct, const PlanRequest& r,
   }
   result.stopReason = "start " + std::to_string(result.best.start) + " (the best plan's): " +
                       result.starts[std::size_t(result.best.start)].stopReason;
+  trimVolume(aligned.GetPointer(), r, result, onEvaluation);
   return result;
 }
 
@@ -305,7 +349,8 @@ nlohmann::json PlanEvaluation::toJson() const {
           {"second_tip_mm", secondTip ? nlohmann::json{secondTipMm.x(), secondTipMm.y(), secondTipMm.z()}
                                       : nlohmann::json(nullptr)},
           {"failure", failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure)},
-          {"warnings", warnings}};
+          {"warnings", warnings},
+          {"volume_trim", volumeTrim}};
 }
 
 nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
@@ -313,22 +358,34 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
   for (const auto& e : evaluations) evaluationsJson.push_back(e.toJson());
   nlohmann::json startsJson = nlohmann::json::array();
   for (const auto& s : starts) startsJson.push_back(s.toJson());
-  // Why the best plan won: its objective's terms, against the runner-up's.
+  // Why the best plan won: its objective's terms, against the runner-up's; and what the volume trim saved.
   std::ostringstream why;
-  why << std::setprecision(4) << "highest objective " << best.objective << " = coverage " << best.coverage << " - "
-      << r.volumeCostPerMl << "/ml x " << best.volumeMl << " ml - limit penalty "
-      << best.coverage - r.volumeCostPerMl * best.volumeMl - best.objective;
+  auto terms = [&](const PlanEvaluation& e) {
+    why << "objective " << e.objective << " = coverage " << e.coverage << " - " << r.volumeCostPerMl << "/ml x "
+        << e.volumeMl << " ml - limit penalty " << e.coverage - r.volumeCostPerMl * e.volumeMl - e.objective;
+  };
+  why << std::setprecision(4) << "the search's highest ";
+  terms(best.volumeTrim ? searchBest : best);
+  if (best.volumeTrim) {
+    why << "; its volume trimmed to the smallest at its depth that keeps its coverage within "
+        << r.trimCoverageTolerance << " and the limits: " << best.volumeMl << " ml, saving "
+        << searchBest.volumeMl - best.volumeMl << " ml (";
+    terms(best);
+    why << ")";
+  }
   const PlanEvaluation* second = nullptr;
   for (const auto& e : evaluations)
-    if (e.index != best.index || e.start != best.start)
+    if (!e.volumeTrim && e.index != best.index && !(best.volumeTrim && e.index == searchBest.index))
       if (!second || e.objective > second->objective) second = &e;
   if (second)
     why << "; the runner-up (" << second->volumeMl << " ml at depth " << second->depthMm << " mm, coverage "
         << second->coverage << (second->withinLimits ? "" : ", outside the limits") << ") scored " << second->objective;
   return {{"best", best.toJson()},
+          {"search_best", searchBest.toJson()},
           {"why_best", why.str()},
           {"trajectory_check", trajectory.toJson()},
-          {"objective", "coverage - volume_cost_per_ml x volume_ml - 5 x (syringe excess / limit + leakage excess / 0.1 ml)"},
+          {"objective", "coverage - volume_cost_per_ml x volume_ml - 5 x (syringe excess / limit + leakage excess / 0.1 ml); "
+                        "then the best's volume trimmed to the smallest keeping its coverage within trim_coverage_tolerance"},
           {"evaluations", evaluationsJson},
           {"stop_reason", stopReason},
           {"optimiser", "NLopt LN_BOBYQA, " + std::to_string(starts.size()) + " starts along the trajectory"},
@@ -343,6 +400,7 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
             {"max_syringe_pressure_mpa", r.maxSyringeMpa},
             {"max_leakage_ml", r.maxLeakageMl},
             {"volume_cost_per_ml", r.volumeCostPerMl},
+            {"trim_coverage_tolerance", r.trimCoverageTolerance},
             {"max_evaluations", r.maxEvaluations},
             {"starts", r.starts},
             {"second_tip", r.secondTip},
@@ -354,7 +412,7 @@ nlohmann::json PlanResult::toJson(const PlanRequest& r) const {
 std::string PlanResult::csv() const {
   std::ostringstream s;
   s << "index,start,depth_mm,volume_ml,tip_x_mm,tip_y_mm,tip_z_mm,coverage,max_syringe_pressure_mpa,leakage_volume_ml,"
-       "objective,within_limits,second_tip_depth_mm,second_tip_volume_ml,failure\n"
+       "objective,within_limits,second_tip_depth_mm,second_tip_volume_ml,failure,volume_trim\n"
     << std::setprecision(10);
   for (const auto& e : evaluations) {
     std::string failure = e.failure;
@@ -364,7 +422,7 @@ std::string PlanResult::csv() const {
       << (e.withinLimits ? 1 : 0) << ',';
     if (e.secondTip) s << e.secondDepthMm << ',' << e.secondVolumeMl;
     else s << ',';
-    s << ",\"" << failure << "\"\n";
+    s << ",\"" << failure << "\"," << (e.volumeTrim ? 1 : 0) << "\n";
   }
   return s.str();
 }

@@ -15,6 +15,17 @@
 // plan whose injection cannot run (a tip in cortex, outside bone, outside the CT) scores -1 and says why; one
 // whose cement reaches the scan's or the region's edge is outside the limits (objective - 5) and says so.
 //
+// The volume trim (the last step; the trade-off made explicit): a local search on a curve whose coverage
+// saturates (coverage rises until the cement fills the target, then stays) stops anywhere on the flat part; of
+// two plans with the same coverage the one with less cement is the plan. So at the best plan's depth the volume is
+// bisected (between --min-volume-ml and the best's, to 0.05 ml: up to 7 more injections) for the smallest whose
+// coverage is within trimCoverageTolerance (0.01: the coverage is counted on voxels, the target ball's and the
+// cement's half-filled front layer, to about that) of the best's and which keeps within the limits. Coverage at one
+// depth does not fall as the volume grows (an injection of V is the first V of a larger one), so the bisection
+// finds the smallest such volume to 0.05 ml. The trimmed plan is `best`; the search's own best stays in
+// `searchBest` (plan.json "search_best"), and why_best says what the trim saved. Not for a two-tip plan (its
+// second tip's share would move with the volume).
+//
 // A second tip (secondTip): the two-depth technique on one trajectory. The cement goes in at depth d, then
 // the cannula is withdrawn to d2 = d_min + t (d - d_min), t in [0, 0.9], and the last share s in
 // [0.2, 0.8] of V goes in there (scene keys second_tip_withdrawal_mm, second_tip_volume_ml): four
@@ -59,6 +70,7 @@ struct PlanRequest {
   int maxEvaluations = 40;                      // over all starts
   int starts = 3;                               // independent BOBYQA starts along the trajectory
   bool secondTip = false;                       // also plan a second, shallower tip on the trajectory
+  double trimCoverageTolerance = 0.01;          // coverage the volume trim may give up (see above); 0: no trim
   // The trajectory against the anatomy (PlanTrajectory.h): computed once before the plan (planInjection does it
   // when absent). A shaft through the spinal canal is refused unless allowCanalCrossing (a deliberate path).
   std::optional<anatomy::TrajectoryCheck> trajectoryCheck;
@@ -85,6 +97,7 @@ struct PlanEvaluation {
   bool withinLimits = false;
   std::string failure; // why the injection could not run (empty when it ran)
   std::vector<std::string> warnings; // the injection's edge warnings (each a limit: objective - 5)
+  bool volumeTrim = false;           // made by the volume trim after the search (not by BOBYQA)
   nlohmann::json toJson() const;
 };
 
@@ -99,7 +112,8 @@ struct PlanStart {
 };
 
 struct PlanResult {
-  PlanEvaluation best;
+  PlanEvaluation best;                      // the plan: the search's best, its volume trimmed (see above)
+  PlanEvaluation searchBest;                // the search's best (highest objective), before the trim
   std::vector<PlanEvaluation> evaluations;  // every start's, in start order
   std::vector<PlanStart> starts;
   std::string stopReason;                   // the best plan's start's
