@@ -24,9 +24,10 @@ constexpr double kBytesPerFieldNode = 32, kFieldVolumeOverCementVolume = 4;
 // kept the other core busy): 816 steps x 674/2 fluid particles in 7.55 s = 3.6e4 per second. A slow,
 // loaded machine on purpose: the estimate should not promise less time than a run takes.
 constexpr double kParticleStepsPerSecond = 3.6e4;
-// The voxel-grid Darcy filling: its arrays (VoxelDarcyFilling.h: porosity, permeability, state, fill,
-// pressure, viscosity, arrival, face fluxes, numbering; the ROI's solid mask, kept solid centres and the
-// simulated CT) and the run's other buffers peak at about 200 bytes per ROI voxel (RunEstimateMemoryTest
+// The voxel-grid Darcy filling: the medium built over the ROI (porosity, permeability), the filling's state in
+// bricks that follow the cement and its front (VoxelDarcyFilling.h: fill, pressure, viscosity, arrival, face
+// fluxes, numbering; all of the ROI once the cement reaches most of it), the ROI's solid mask, kept solid centres
+// and the simulated CT, and the run's other buffers peak at about 200 bytes per ROI voxel (RunEstimateMemoryTest
 // measures the peak resident memory of a 512 000-voxel run: 206 bytes per voxel on 2026-12-03). Its work: about max(100, 3 n^(1/3)) pressure solves for
 // n cement voxels (139 for the 5 ml phantom scene, 47 600 voxels), each ~100 CG iterations over half of them
 // on average; measured 3.5e8 voxel-iterations in 2.64 s (1.3e8 per second, one core with the other busy).

@@ -69,7 +69,7 @@ SimulatedRun StudyRunner::simulate(const StudyRunSpec& spec) const {
     simulated.failure = e.what();
     return simulated;
   }
-  simulated.metrics = nlohmann::json::parse(filter->GetMetricsJSON());
+  simulated.metrics = filter->GetResult()->metrics; // the typed result's, not its JSON text parsed back
   simulated.simulatedCt = imaging::imageFromVtk(filter->GetSimulatedCTOutput());
   return simulated;
 }
