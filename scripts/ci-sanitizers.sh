@@ -7,7 +7,7 @@
 #      folder, never the tree), two at a time;
 #   2. the same clang build of the suites of the plain C++ modules (Rheology, SPH, VoxelDarcy, Scene: the unit
 #      ones and the voxel filling's validation suite), which need neither VTK nor ITK;
-#   3. (SANITIZE_UNIT_LABEL=1, the default) every other suite of the whole tree's `unit` label (the VTK and ITK
+#   3. (SANITIZE_UNIT_LABEL=1; off by default and in CI, see below) every other suite of the whole tree's `unit` label (the VTK and ITK
 #      ones, and the command suites with the cementsph program they run) as a Debug -O1 -g build of the CMake
 #      tree with GCC, in $SANITIZE_CMAKE_DIR (GCC: Debian's ITK 5.2 headers refuse clang,
 #      itk_compiler_detection.h), run by ctest -L unit, JOBS at a time. Only those suites' targets are built; the
@@ -23,6 +23,15 @@
 # suppressions). Estimated warm (same clone path, nothing changed): about 5 min of linking for step 3's 24 suites
 # and the program, 2 min of tests, so .ci/run about 26-27 min (build.sh about 11, ctest 5.3, steps 1-2 about 3,
 # step 3 about 7). Cold it does not fit: CI_DEADLINE stops it (below).
+# Why step 3 is not in CI yet (decided 2026-12-03, 16:40 UTC): about 41 test sources and the program's sources
+# carry absolute paths in their compile lines (CEMENTSPH_TEST_DATA_DIR, CEMENTSPH_BINARY_DIR, CEMENTSPH_EXECUTABLE,
+# CEMENTSPH_DATA_DIR), so in CI's clone at its own path they miss ccache and compile cold under ASan: tens of
+# minutes on 2 cores, over the 30 min aim and, with a cold Release build beside it, near the 90 min limit. The fix
+# is to give those paths to the suites from one small compiled file (the macros calling into it), so that only it
+# misses; then step 3 can be switched on in .ci/run. Until then it runs by hand:
+# SANITIZE_UNIT_LABEL=1 bash scripts/ci-sanitizers.sh (last run 2026-12-03: 145 tests, 141 passed; SceneKeysTest's 4
+# failed with a heap-buffer-overflow that was one object compiled against a brick layout tried and reverted in the
+# shared tree, and passed, 6 of 6, once that object was rebuilt).
 # CI_DEADLINE (seconds since the epoch, set by .ci/run to 85 min after CI starts, short of its 90 min hard limit):
 # if step 3's build would run past it (a cold ccache), the stage stops with a line saying so, and fails; what was
 # compiled stays cached, so the next run continues from there.
@@ -32,7 +41,7 @@
 # The fuzzers start from a fixed seed (FUZZ_SEED, default 1) so that a CI run is reproducible: the same code
 # explores the same inputs, a slower machine a prefix of them. Exploratory runs that look for new findings use
 # FUZZ_SEED=0 (libFuzzer picks one) and a longer FUZZ_SECONDS; what they find goes into the seed corpus.
-# Environment: SANITIZE_BUILD_DIR (default ./build-sanitize), SANITIZE_UNIT_LABEL (default 1),
+# Environment: SANITIZE_BUILD_DIR (default ./build-sanitize), SANITIZE_UNIT_LABEL (default 0),
 # SANITIZE_CMAKE_DIR (default ./build-asan), FUZZ_SECONDS (default 30), FUZZ_SEED (default 1), JOBS (default nproc),
 # CI_DEADLINE (default none), CEMENTSPH_BUILD_LOCK (default /tmp/cementsph-build.lock; do not call this script
 # under that lock).
@@ -40,7 +49,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 out="${SANITIZE_BUILD_DIR:-$here/build-sanitize}"
 cmake_out="${SANITIZE_CMAKE_DIR:-$here/build-asan}"
-unit_label="${SANITIZE_UNIT_LABEL:-1}"
+unit_label="${SANITIZE_UNIT_LABEL:-0}"
 seconds="${FUZZ_SECONDS:-30}"
 seed="${FUZZ_SEED:-1}"
 jobs="${JOBS:-$(nproc)}"
