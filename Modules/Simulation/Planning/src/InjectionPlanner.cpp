@@ -195,7 +195,8 @@ void trimVolume(const imaging::ImageType* ct, const PlanRequest& r, PlanResult& 
   std::vector<PlanEvaluation> trims;
   Context context{injection, &r, found.start, &trims};
   const double wanted = found.coverage - r.trimCoverageTolerance;
-  auto enough = [&](double volumeMl) { // runs the injection; true when it keeps the coverage and the limits
+  // Runs the injection at the best depth; when it keeps the coverage and the limits it is the smallest so far.
+  auto enough = [&](double volumeMl) {
     const double x[2] = {found.depthMm, volumeMl};
     evaluate(2, x, nullptr, &context);
     PlanEvaluation& e = trims.back();
@@ -203,23 +204,18 @@ void trimVolume(const imaging::ImageType* ct, const PlanRequest& r, PlanResult& 
     e.index = int(result.evaluations.size());
     result.evaluations.push_back(e);
     if (onEvaluation) onEvaluation(e);
-    return e.failure.empty() && e.withinLimits && e.coverage >= wanted;
+    const bool keeps = e.failure.empty() && e.withinLimits && e.coverage >= wanted;
+    if (keeps) result.best = e;
+    return keeps;
   };
-  const PlanEvaluation* smallest = &found;
-  std::size_t smallestTrim = trims.size(); // none yet
   double low = r.minVolumeMl, high = found.volumeMl;
   constexpr double kVolumeResolutionMl = 0.05; // BOBYQA's volume xtol
-  if (high - low > kVolumeResolutionMl && enough(low)) {
-    smallestTrim = trims.size() - 1;
-    high = low;
-  }
+  if (high - low > kVolumeResolutionMl && enough(low)) high = low;
   while (high - low > kVolumeResolutionMl) {
     const double middle = 0.5 * (low + high);
-    if (enough(middle)) high = middle, smallestTrim = trims.size() - 1;
+    if (enough(middle)) high = middle;
     else low = middle;
   }
-  if (smallestTrim < trims.size()) smallest = &result.evaluations[std::size_t(trims[smallestTrim].index)];
-  result.best = *smallest;
 }
 } // namespace
 

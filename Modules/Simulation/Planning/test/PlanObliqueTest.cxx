@@ -10,6 +10,7 @@
 #include "cementsph/imaging/AffineRegistration.h"
 #include "cementsph/phantom/VertebraPhantom.h"
 #include "cementsph/planning/InjectionPlanner.h"
+#include "VertebraPlanRequest.h"
 
 #include <gtest/gtest.h>
 #include <itkIdentityTransform.h>
@@ -50,13 +51,10 @@ imaging::ImageType::Pointer tilted(const imaging::ImageType* src, double degrees
 // The body's centre is at (field_x / 2, 21, field_z / 2) (VertebraPhantom.h): the default field's plan, moved with it.
 planning::PlanRequest request(const phantom::VertebraOptions& o) {
   const Eigen::Vector3d shift(o.fieldMm[0] / 2 - 32, 0, o.fieldMm[2] / 2 - 22.5);
-  planning::PlanRequest r;
-  r.scene = scene::scenePreset("paper");
-  r.entryMm = Eigen::Vector3d(48.5, 52.4, 22.5) + shift; // transpedicular, clear of the canal (PlanTrajectoryTest)
-  r.targetCentreMm = Eigen::Vector3d(32, 21, 22.5) + shift;
-  r.direction = r.targetCentreMm - r.entryMm;
+  // transpedicular, clear of the canal (PlanTrajectoryTest)
+  planning::PlanRequest r = planning::testing::transpedicularRequest(Eigen::Vector3d(32, 21, 22.5) + shift,
+                                                                     Eigen::Vector3d(48.5, 52.4, 22.5) + shift);
   r.minDepthMm = 15;
-  r.maxDepthMm = r.direction.norm();
   r.targetRadiusMm = 6;
   r.minVolumeMl = 1;
   r.maxVolumeMl = 3;

@@ -13,10 +13,11 @@ inline imaging::ImageType::Pointer vertebraPhantomCt() {
   return imaging::readVolume((std::filesystem::path(CEMENTSPH_TEST_DATA_DIR) / "vertebra-phantom" / "pre.nrrd").string());
 }
 
-inline PlanRequest transpedicularRequest(const Eigen::Vector3d& targetMm = Eigen::Vector3d(32, 21, 22.5)) {
+inline PlanRequest transpedicularRequest(const Eigen::Vector3d& targetMm = Eigen::Vector3d(32, 21, 22.5),
+                                        const Eigen::Vector3d& entryMm = Eigen::Vector3d(48.5, 52.4, 22.5)) {
   PlanRequest r;
   r.scene = scene::scenePreset("paper");
-  r.entryMm = Eigen::Vector3d(48.5, 52.4, 22.5);
+  r.entryMm = entryMm;
   r.targetCentreMm = targetMm;
   r.direction = r.targetCentreMm - r.entryMm;
   r.maxDepthMm = r.direction.norm();
