@@ -17,21 +17,20 @@ set(CEMENTSPH_TEST_SUPPORT_DIR ${PROJECT_SOURCE_DIR}/Testing/Support)
 set(CEMENTSPH_TEST_BASELINE_DIR ${PROJECT_SOURCE_DIR}/Testing/Data/Baselines)
 
 # cementsph_add_gtest(<name> SOURCES ... LIBS ... LABELS ... [TIMEOUT s] [PROGRAM])
-# PROGRAM: the suite runs the cementsph program, whose path it gets as CEMENTSPH_EXECUTABLE (and CEMENTSPH_EXE),
-# and is built after it.
+# PROGRAM: the suite runs the cementsph program, whose path it gets as CEMENTSPH_EXECUTABLE (TestPaths.h), and is
+# built after it.
 function(cementsph_add_gtest name)
   cmake_parse_arguments(T "PROGRAM" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${T_SOURCES})
   if(T_PROGRAM)
-    target_compile_definitions(${name} PRIVATE CEMENTSPH_EXECUTABLE="$<TARGET_FILE:cementsph>"
-      CEMENTSPH_EXE="$<TARGET_FILE:cementsph>")
     add_dependencies(${name} cementsph)
   endif()
-  target_link_libraries(${name} PRIVATE GTest::gtest GTest::gtest_main ${T_LIBS} CementSPH::warnings)
+  target_link_libraries(${name} PRIVATE GTest::gtest GTest::gtest_main ${T_LIBS} cementsph_test_paths
+    CementSPH::warnings)
   target_include_directories(${name} PRIVATE ${CEMENTSPH_TEST_SUPPORT_DIR})
-  target_compile_definitions(${name} PRIVATE
-    CEMENTSPH_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/Data"
-    CEMENTSPH_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  # The paths (CEMENTSPH_TEST_DATA_DIR, CEMENTSPH_BINARY_DIR, CEMENTSPH_EXECUTABLE) come from TestPaths.h, found on
+  # the include path above: no absolute path on the suite's compile line, so ccache hits in a clone at another path.
+  target_compile_options(${name} PRIVATE -include TestPaths.h)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 600)
   endif()

@@ -65,8 +65,9 @@ mkdir -p "$out/obj" "$out/bin" "$out/findings"
 # ccache rewrites absolute paths under the source root to relative ones before hashing (CCACHE_BASEDIR) and leaves
 # the build folder's path out of the key of -g compiles (CCACHE_NOHASHDIR), so CI's clone at another path hits what
 # an earlier clone compiled (checked 2026-12-03: the clang build in /tmp/h3-clone, 45 misses, then in
-# /tmp/h3-clone2, 45 of 45 hits). Objects with an absolute path in a -D that their source uses (the test suites' CEMENTSPH_TEST_DATA_DIR and
-# CEMENTSPH_BINARY_DIR, cementsph-all's CEMENTSPH_DATA_DIR) still miss in a clone at a new path, as they must.
+# /tmp/h3-clone2, 45 of 45 hits). The paths the suites need come from one compiled file, Testing/Support/TestPaths.cpp
+# (TestPaths.h is force-included), and demo's data folder is a -D on DemoCommand.cpp alone: only those two objects
+# carry the clone's path, so only they miss in a clone at a new path.
 export CCACHE_BASEDIR="$here" CCACHE_NOHASHDIR=1
 
 # ---- build ----
@@ -87,7 +88,11 @@ if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
   echo "CXX := $launcher$cxx"
   # fuzzer-no-link: coverage instrumentation in the code under test too, or libFuzzer sees only the target
   echo "CXXFLAGS := -std=c++17 -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=undefined -fopenmp -MMD -MP $includes"
-  echo "CXXFLAGS += -DCEMENTSPH_TEST_DATA_DIR=\\\"$here/Data\\\" -DCEMENTSPH_BINARY_DIR=\\\"$out\\\""
+  # The suites' paths come from one object (Testing/Support/TestPaths.cpp), never from -D strings on every compile
+  # line: those would put the clone's path into every object's ccache key.
+  echo "TESTFLAGS := -I$here/Testing/Support -include TestPaths.h"
+  echo "obj/TestPaths.o: \$(SRC)/Testing/Support/TestPaths.cpp"
+  echo "	\$(CXX) \$(CXXFLAGS) -DCEMENTSPH_PATH_DATA=\\\"$here/Data\\\" -DCEMENTSPH_PATH_BINARY=\\\"$out\\\" -DCEMENTSPH_PATH_PROGRAM=\\\"\\\" -DCEMENTSPH_PATH_BASELINES=\\\"$here/Testing/Data/Baselines\\\" -c \$< -o \$@"
   echo "LDFLAGS := -fsanitize=address,undefined,fuzzer-no-link -fopenmp"
   echo "SRC := $here"
   objs=""
@@ -109,8 +114,8 @@ if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
   for t in $tests; do
     n="${t%%:*}"; s="${t#*:}"; all="$all bin/$n"
     echo "obj/test_$n.o: \$(SRC)/$s"
-    echo "	\$(CXX) \$(CXXFLAGS) -I\$(SRC)/$(dirname "$s") -c \$< -o \$@"
-    echo "bin/$n: obj/test_$n.o lib/libcore.a"
+    echo "	\$(CXX) \$(CXXFLAGS) \$(TESTFLAGS) -I\$(SRC)/$(dirname "$s") -c \$< -o \$@"
+    echo "bin/$n: obj/test_$n.o obj/TestPaths.o lib/libcore.a"
     echo "	\$(CXX) \$(LDFLAGS) \$^ -lgtest_main -lgtest -lpthread -o \$@"
   done
   echo "all:$all"
