@@ -262,6 +262,43 @@ TEST(VertebraAnatomy, APermutedFlippedGridGivesTheSameClasses) {
   EXPECT_EQ(differ, 0u);
 }
 
+// Air around the scan changes nothing (what an oblique CT's aligned grid adds in its corners, AxisAlignedCT.h):
+// the variant padded with air (-1000 HU) by 3 to 9 voxels, unevenly on the six sides, gives in every voxel of
+// the original the class the unpadded variant gives (the oracle: the rule on the unpadded grid, whose field is
+// soft tissue to its edges), and air in the padding; the target's centroid is the same point (to round-off of
+// the shifted origin) and the description is the same line.
+TEST(VertebraAnatomy, AirAroundTheScanChangesNoClass) {
+  const auto& s = scene();
+  const int nx = s.grid.size[0], ny = s.grid.size[1], nz = s.grid.size[2];
+  const int before[3] = {3, 9, 4}, after[3] = {7, 5, 6};
+  anatomy::Grid g = s.grid;
+  for (int a = 0; a < 3; ++a) g.size[a] = s.grid.size[a] + before[a] + after[a];
+  g.originMm = s.grid.centreMm(-before[0], -before[1], -before[2]);
+  auto padded = [&](int i, int j, int k) {
+    return std::size_t(i + before[0]) +
+           std::size_t(g.size[0]) * (std::size_t(j + before[1]) + std::size_t(g.size[1]) * std::size_t(k + before[2]));
+  };
+  std::vector<float> hu(g.count(), -1000.0f);
+  std::size_t n = 0;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) hu[padded(i, j, k)] = s.hu[n++];
+  const auto a = anatomy::classifyAnatomyFromCT(hu.data(), g, s.truth->c, s.ao);
+  const auto& unpadded = ctAnatomy();
+  std::size_t differ = 0;
+  n = 0;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) differ += a.at(padded(i, j, k)) != unpadded.at(n++) ? 1 : 0;
+  EXPECT_EQ(differ, 0u);
+  const std::size_t paddingVoxels = g.count() - s.grid.count();
+  EXPECT_NEAR(a.volumeMl(TissueClass::Air), double(paddingVoxels) * g.voxelVolumeMm3() / 1000.0 + unpadded.volumeMl(TissueClass::Air),
+              1e-9);
+  EXPECT_TRUE(a.targetFound);
+  for (int q = 0; q < 3; ++q) EXPECT_NEAR(a.targetCentroidMm[q], unpadded.targetCentroidMm[q], 1e-9);
+  EXPECT_EQ(a.description, unpadded.description);
+}
+
 // Marrow fat open to a gap of the cortex is still bone: on a copy of the CT, fat (-30 HU) in a 4 mm ball whose
 // posterior pole reaches the basivertebral foramen (centre 11 mm behind the body's centre, at mid height; written
 // into every voxel of the ball that is not cortex, > 350 HU). In 3-D the fat reaches the canal through the
