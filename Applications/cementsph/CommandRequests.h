@@ -2,18 +2,21 @@
 // and `inject` its X-ray sequence. Each command's file fills its request from the command line and calls the
 // same function, so no subcommand is re-entered through argv strings. Every field is an option of the
 // command of the same name (`cementsph <command> --help`); the defaults are the options' defaults.
-// Each returns the command's exit status and, when `metrics` is given, fills it with what the command wrote to
-// its metrics.json, so that a caller (demo) need not read back the file.
+// Each returns the command's exit status and, when a result is asked for, fills it with the command's typed result
+// (what its metrics.json is written from), so that a caller (demo) need not read back the file.
 #pragma once
+
+// ITK's headers (the comparison's) before the injection's: ITK carries its own copy of Eigen, which must come first.
+#include "cementsph/study/CementComparison.h"
 
 #include "DrrOptions.h"
 
 #include "cementsph/drr/XraySequence.h"
+#include "cementsph/drr/XraySequenceFiles.h"
 #include "cementsph/imaging/CementSegmentation.h"
+#include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneSettings.h"
 #include "cementsph/surfacemetrics/Isosurface.h"
-
-#include <nlohmann/json_fwd.hpp>
 
 #include <array>
 #include <memory>
@@ -31,7 +34,7 @@ struct InjectRequest {
   int threads = 0;                    // 0: the cores the load average leaves free
   bool quiet = false, noPictures = false, allowLarge = false;
 };
-int runInject(const InjectRequest& request, nlohmann::json* metrics = nullptr);
+int runInject(const InjectRequest& request, scene::InjectionRunResult* result = nullptr);
 
 // `cementsph compare`.
 struct CompareRequest {
@@ -43,7 +46,7 @@ struct CompareRequest {
   double smoothingVoxels = surfacemetrics::IsosurfaceOptions{}.smoothingSigmaVoxels;
   bool noRegistration = false, noCementMask = false, noPictures = false;
 };
-int runCompare(const CompareRequest& request, nlohmann::json* metrics = nullptr);
+int runCompare(const CompareRequest& request, study::CementComparison* result = nullptr);
 
 // `cementsph xray`.
 struct XrayRequest {
@@ -65,7 +68,7 @@ struct XrayRequest {
   std::shared_ptr<const drr::XraySequence> projected;
   double projectedSeconds = 0.0; // what projecting them took
 };
-int runXray(const XrayRequest& request, nlohmann::json* metrics = nullptr);
+int runXray(const XrayRequest& request, drr::XrayHeadline* headline = nullptr);
 // The options `xray` projects a sequence with: the geometry for its first frame's voxel-centre bounds (the detector
 // fitted to them unless its size was given), the cement threshold, the threads, the injection point (given, else
 // tipMm: an inject folder's tip).

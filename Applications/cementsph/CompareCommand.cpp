@@ -137,7 +137,7 @@ cementsph::app::CommandRunner setupCompare(CLI::App& sub) {
 
 namespace cementsph::app {
 
-int runCompare(const CompareRequest& a, nlohmann::json* metrics) {
+int runCompare(const CompareRequest& a, study::CementComparison* result) {
   study::CementComparisonRequest request;
   request.pre = a.pre;
   request.post = a.post;
@@ -171,8 +171,8 @@ int runCompare(const CompareRequest& a, nlohmann::json* metrics) {
     comparison.metrics["render_backend"] = rendering::renderBackendName(*backend);
     study::writeCementComparisonMetrics(comparison, out);
   }
-  if (metrics) *metrics = comparison.metrics;
   printSummary(comparison, out);
+  if (result) *result = std::move(comparison);
   return pictures.status();
 }
 

@@ -260,7 +260,7 @@ InjectRun runFilter(const InjectRequest& a, const scene::SceneConfig& scene, Xra
 
 } // namespace
 
-int runInject(const InjectRequest& a, json* metrics) {
+int runInject(const InjectRequest& a, scene::InjectionRunResult* result) {
   scene::SceneConfig scene = scene::loadSceneFile(a.scene, a.settings);
   if (!a.labels.empty()) {
     scene.labelsPath = a.labels;
@@ -270,7 +270,7 @@ int runInject(const InjectRequest& a, json* metrics) {
   std::optional<XrayProjection> xray;
   if (scene.simulatedCtSnapshots && !a.noPictures) xray.emplace(a, scene);
   const InjectRun run = runFilter(a, scene, xray ? &*xray : nullptr);
-  if (metrics) *metrics = run.result.metrics;
+  if (result) *result = run.result;
   printSummary(run.result.summary, a.out);
   if (a.noPictures) return 0;
   const fs::path out(a.out);

@@ -15,7 +15,6 @@
 // A thin layer: the frame lists, sequence.csv and metrics.json are CementSPH::DRR's (XraySequenceFiles.h), the
 // staged output folder ImagingIO's (StagedFolder.h); this file parses the options, runs the steps in order
 // and prints the summary.
-#include "cementsph/provenance/Provenance.h"
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
 #include "DrrOptions.h"
@@ -284,7 +283,7 @@ drr::XraySequenceOptions xraySequenceOptions(const XrayRequest& a, const std::ar
   return options;
 }
 
-int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
+int runXray(const XrayRequest& a, drr::XrayHeadline* headline) {
   const auto start = std::chrono::steady_clock::now();
   checkRequest(a);
   XrayRun run;
@@ -326,13 +325,11 @@ int runXray(const XrayRequest& a, nlohmann::json* metricsOut) {
   record.pictures = pictures.written();
   if (const auto backend = rendering::lastRenderBackend()) record.renderBackend = rendering::renderBackendName(*backend);
   record.totalSeconds = secondsSince(start) + a.projectedSeconds; // with the projections made beforehand
-  nlohmann::json metrics = drr::xrayMetricsJson(record);
-  metrics["provenance"] = provenance::toJson();
-  imaging::writeTextAtomically((dir / "metrics.json").string(), metrics.dump(2) + "\n");
+  drr::writeXrayMetrics(record, dir / "metrics.json");
   staged.publish({"sequence_drr_####.nrrd", "sequence_drr_####.png", "reference_drr_####.nrrd",
                   "reference_drr_####.png"});
   record.totalSeconds = secondsSince(start) + a.projectedSeconds;
-  if (metricsOut) *metricsOut = std::move(metrics);
+  if (headline) *headline = drr::xrayHeadline(record);
   printSummary(a, run, record);
   return pictures.status();
 }

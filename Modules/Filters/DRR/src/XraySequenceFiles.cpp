@@ -1,5 +1,8 @@
 #include "cementsph/drr/XraySequenceFiles.h"
 
+#include "cementsph/imaging/AtomicFile.h"
+#include "cementsph/provenance/Provenance.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -193,6 +196,26 @@ json xrayMetricsJson(const XrayRunRecord& run) {
   metrics["timing_s"] = {{"drr_and_segmentation", run.drrSeconds}, {"write", run.writeSeconds},
                          {"pictures", run.pictureSeconds}, {"total", run.totalSeconds}};
   return metrics;
+}
+
+void writeXrayMetrics(const XrayRunRecord& run, const fs::path& file) {
+  json metrics = xrayMetricsJson(run);
+  metrics["provenance"] = provenance::toJson();
+  imaging::writeTextAtomically(file.string(), metrics.dump(2) + "\n");
+}
+
+XrayHeadline xrayHeadline(const XrayRunRecord& run) {
+  const XraySequence& sequence = *run.sequence;
+  XrayHeadline h;
+  h.finalTimeS = sequence.frames().back().timeS;
+  h.finalProjectedAreaMm2 = sequence.frames().back().projectedAreaMm2;
+  if (!run.comparison) return h;
+  h.finalReferenceProjectedAreaMm2 = run.reference->frames().back().projectedAreaMm2;
+  if (const XrayFramePair* last = lastFramePair(*run.comparison); last && last->reference) {
+    h.finalFrameDice = *last->dice;
+    h.finalFrameIou = *last->iou;
+  }
+  return h;
 }
 
 } // namespace cementsph::drr

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,8 +55,21 @@ struct XrayRunRecord {
 // The warnings of a comparison (its last frame matched no reference frame), for metrics.json and stderr.
 std::vector<std::string> xrayComparisonWarnings(const XrayComparison* comparison);
 
-// metrics.json without its provenance (which the caller adds): inputs, geometry, segmentation rule, frame
-// counts and final areas, the final frame's Dice / IoU, warnings, pictures, timing.
+// metrics.json without its provenance: inputs, geometry, segmentation rule, frame counts and final areas, the
+// final frame's Dice / IoU, warnings, pictures, timing.
 nlohmann::json xrayMetricsJson(const XrayRunRecord& run);
+
+// Writes metrics.json (xrayMetricsJson with the program's provenance) to file, atomically.
+void writeXrayMetrics(const XrayRunRecord& run, const std::filesystem::path& file);
+
+// A run's headline figures, as metrics.json holds them (final_time_s, final_projected_area_mm2,
+// final_reference_projected_area_mm2, final_frame's dice and iou), for a caller that gathers them (demo).
+// The reference's figures are empty without a reference; the final frame's when the sequence's last frame
+// matched no reference frame.
+struct XrayHeadline {
+  double finalTimeS = 0, finalProjectedAreaMm2 = 0;
+  std::optional<double> finalReferenceProjectedAreaMm2, finalFrameDice, finalFrameIou;
+};
+XrayHeadline xrayHeadline(const XrayRunRecord& run);
 
 } // namespace cementsph::drr
