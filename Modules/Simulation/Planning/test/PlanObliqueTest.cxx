@@ -1,12 +1,16 @@
 // plan on an oblique series (issue 20 item 5: "oblique scans plan as fast as axial ones"): the vertebra
 // phantom and a copy of it on a grid tilted 20 degrees about x (a gantry tilt; the same physical object,
 // sampled trilinearly), planned with the same request. The plan aligns the oblique CT once, not once per
-// injection, so the tilted plan costs what its injections cost (its aligned grid takes, along each patient axis,
-// the spacing of the CT axis nearest it, 1 x 1 x 1.5 mm here, over the tilted box: more voxels than the axial
-// grid, which bounds how close to 1 the ratio can be).
+// injection; its aligned grid takes, along each patient axis, the spacing of the CT axis nearest it (1 x 1 x 1.5
+// mm here) over the tilted box, whose corners are air (kOutsideScanHu). Each injection's work scales with the
+// voxels it is given: its region of interest (the same size on both grids) and the bone rule's 100 mm cube
+// about the tip, which the rule cuts to the box of the voxels that are not air (VertebraAnatomy.cpp), so the
+// tilted grid's air corners cost nothing. Measured (2-core VM, load 2.3-2.9, 3 runs): tilted / axial CPU 1.05-1.17x
+// on the bundled field, 0.98-1.14x on the clinical-size one (before the cut: 1.21x and 1.22x).
 // Oracles: the same trajectory verdict; the best plans' coverage within 0.1 of each other (the tilted CT is a
-// trilinear resampling of the axial one, so the two runs differ by the interpolation only); the wall-time ratio
-// is printed and bounded (3x, far below the 7.5x the issue measured with a resampling per injection).
+// trilinear resampling of the axial one, so the two runs differ by the interpolation only); the CPU-time ratio
+// is printed and bounded at 1.5x (the same work up to the interpolated data; the margin is the shared
+// machine's spread, +-0.1 at 1 thread, and far below the 7.5x the issue measured with a resampling per injection).
 #include "cementsph/imaging/AffineRegistration.h"
 #include "cementsph/phantom/VertebraPhantom.h"
 #include "cementsph/planning/InjectionPlanner.h"
@@ -83,9 +87,13 @@ void planBothWays(const phantom::VertebraOptions& o, int repeats, double maxRati
     axialS = std::min(axialS, seconds([&] { axialPlan = planning::planInjection(v.ct, r); }));
     obliqueS = std::min(obliqueS, seconds([&] { obliquePlan = planning::planInjection(oblique, r); }));
   }
+  // The two searches may take different numbers of injections (the tilted CT's interpolation moves the
+  // optimiser's path): the ratio per injection says what the tilt costs each one.
+  const double axialN = double(axialPlan.evaluations.size()), obliqueN = double(obliquePlan.evaluations.size());
   std::cout << "plan on a " << o.fieldMm[0] << " x " << o.fieldMm[1] << " x " << o.fieldMm[2] << " mm field, "
-            << axialPlan.evaluations.size() << " injections, CPU: axial " << axialS << " s, tilted 20 deg " << obliqueS
-            << " s (" << obliqueS / axialS << "x); best coverage " << axialPlan.best.coverage << " / "
+            << axialN << " / " << obliqueN << " injections, CPU: axial " << axialS << " s, tilted 20 deg " << obliqueS
+            << " s (" << obliqueS / axialS << "x; per injection " << (obliqueS / obliqueN) / (axialS / axialN)
+            << "x); best coverage " << axialPlan.best.coverage << " / "
             << obliquePlan.best.coverage << ", volume " << axialPlan.best.volumeMl << " / " << obliquePlan.best.volumeMl
             << " ml\n";
   EXPECT_EQ(axialPlan.trajectory.verdict, "clear") << axialPlan.trajectory.message;
@@ -97,9 +105,9 @@ void planBothWays(const phantom::VertebraOptions& o, int repeats, double maxRati
 }
 
 // The bundled phantom's field (64 x 70 x 45 mm): the tilted copy's aligned grid (the series' own spacings over the
-// tilted box, 64 x 81 x 66 mm) has about 1.7x the axial grid's voxels, and each injection's anatomy and region
-// scale with them.
-TEST(PlanOblique, ATiltedCopyPlansAlike) { planBothWays({}, 2, 3.0); }
+// tilted box, 64 x 81 x 66 mm) has about 1.7x the axial grid's voxels, the extra all air: the bone rule's cube,
+// which holds the whole field, is cut back to about the axial field.
+TEST(PlanOblique, ATiltedCopyPlansAlike) { planBothWays({}, 2, 1.5); }
 
 // A clinical-size field (200 x 70 x 200 mm, 1.9 million voxels; tilted about x, so the vertebra, near the y
 // centre, stays inside the tilted grid): aligning the whole scan for every injection
@@ -107,7 +115,7 @@ TEST(PlanOblique, ATiltedCopyPlansAlike) { planBothWays({}, 2, 3.0); }
 TEST(PlanOblique, ATiltedClinicalSizeScanPlansNearlyAsFastAsTheAxialOne) {
   phantom::VertebraOptions o;
   o.fieldMm = {200, 70, 200};
-  planBothWays(o, 1, 2.0);
+  planBothWays(o, 1, 1.5);
 }
 
 } // namespace
