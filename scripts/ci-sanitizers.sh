@@ -91,10 +91,10 @@ if command -v ccache >/dev/null 2>&1; then launcher="ccache "; fi
   # The suites' paths come from one object (Testing/Support/TestPaths.cpp), never from -D strings on every compile
   # line: those would put the clone's path into every object's ccache key.
   echo "TESTFLAGS := -I$here/Testing/Support -include TestPaths.h"
-  echo "obj/TestPaths.o: \$(SRC)/Testing/Support/TestPaths.cpp"
-  echo "	\$(CXX) \$(CXXFLAGS) -DCEMENTSPH_PATH_DATA=\\\"$here/Data\\\" -DCEMENTSPH_PATH_BINARY=\\\"$out\\\" -DCEMENTSPH_PATH_PROGRAM=\\\"\\\" -DCEMENTSPH_PATH_BASELINES=\\\"$here/Testing/Data/Baselines\\\" -c \$< -o \$@"
   echo "LDFLAGS := -fsanitize=address,undefined,fuzzer-no-link -fopenmp"
   echo "SRC := $here"
+  echo "obj/TestPaths.o: \$(SRC)/Testing/Support/TestPaths.cpp"
+  echo "	\$(CXX) \$(CXXFLAGS) -DCEMENTSPH_PATH_DATA=\\\"$here/Data\\\" -DCEMENTSPH_PATH_BINARY=\\\"$out\\\" -DCEMENTSPH_PATH_PROGRAM=\\\"\\\" -DCEMENTSPH_PATH_BASELINES=\\\"$here/Testing/Data/Baselines\\\" -c \$< -o \$@"
   objs=""
   for s in $sph_src; do o="obj/${s//\//_}.o"; objs="$objs $o"; echo "$o: \$(SRC)/$s"; echo "	\$(CXX) \$(CXXFLAGS) -c \$< -o \$@"; done
   echo "obj/VolumeFileChecks.o: \$(SRC)/Modules/Imaging/IO/src/VolumeFileChecks.cpp"
