@@ -298,6 +298,7 @@ void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const
       throw std::invalid_argument("voxel Darcy: openVoxels: porosity must be in (0, 1] and permeability > 0 at " +
                                   mm(medium_.centre(c)));
     if (state(c) != kClosed) continue;
+    pendingDt_ = 0; // the medium changed: the next step solves afresh
     medium_.porosity[c] = porosity[i]; // > 0: the voxel is a pore voxel from now on
     medium_.permeability[c] = permeability[i];
   }
@@ -316,6 +317,7 @@ void VoxelDarcyFilling::setSource(const Eigen::Vector3d& centre, double radius) 
   if (state(own) == kClosed)
     throw std::invalid_argument("voxel Darcy: the outlet " + mm(centre) + " lies in an impermeable voxel");
   source_.clear();
+  pendingDt_ = 0; // a new outlet: the next step solves afresh
   source_.push_back(own);
   const int r[3] = {int(std::ceil(radius / medium_.spacing[0])), int(std::ceil(radius / medium_.spacing[1])),
                     int(std::ceil(radius / medium_.spacing[2]))};
@@ -336,6 +338,7 @@ void VoxelDarcyFilling::setEntryPressure(std::vector<float> entryPa) {
   for (float e : entryPa)
     if (!(e >= 0) || !std::isfinite(e)) throw std::invalid_argument("voxel Darcy: entry pressures must be finite and >= 0");
   entryPressure_ = std::move(entryPa);
+  pendingDt_ = 0;
 }
 
 void VoxelDarcyFilling::setShearRateViscosity(std::function<double(double)> law, double flowIndex, int picard) {
@@ -396,6 +399,7 @@ void VoxelDarcyFilling::setViscosity(double mu) {
 void VoxelDarcyFilling::setVoxelViscosity(std::vector<double> mu) {
   if (mu.size() != medium_.count()) throw std::invalid_argument("voxel Darcy: one viscosity per voxel");
   voxelViscosity_ = std::move(mu);
+  pendingDt_ = 0;
   bricks_.forEachVoxel([&](std::size_t c, VoxelBricks::Brick& b, int local) { b.voxel[local].viscosity = voxelViscosity_[c]; });
   uniformViscosity_ = false;
 }
@@ -523,9 +527,19 @@ void VoxelDarcyFilling::depositExcess(std::size_t from, double volume) {
                        " mm^3 had nowhere to go at t = " + std::to_string(time_) +
                        " s); enlarge roi_size_mm or inject less");
 }
-double VoxelDarcyFilling::step(double flowRate, double dtMax) {
+double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) {
   if (source_.empty()) throw std::logic_error("voxel Darcy: setSource before step");
-  if (!(dtMax > 0) || !(flowRate >= 0)) throw std::invalid_argument("voxel Darcy: step needs dtMax > 0, flow rate >= 0");
+  if (!(dtMax > 0) || !(flowRate >= 0) || !(stopAfter > 0))
+    throw std::invalid_argument("voxel Darcy: step needs dtMax > 0, stopAfter > 0, flow rate >= 0");
+  // The rest of a step an output time cut short: the same inflows (the step is explicit in time), no solve.
+  if (pendingDt_ > 0 && flowRate == pendingFlowRate_) {
+    const double dt = std::min({pendingDt_, dtMax, stopAfter});
+    pendingDt_ -= dt;
+    if (pendingDt_ <= 1e-9 * dt) pendingDt_ = 0; // round-off of the output time's subtraction
+    advanceFill(flowRate, dt);
+    return dt;
+  }
+  pendingDt_ = 0;
   const auto t0 = Clock::now();
   const int nx = medium_.size[0], ny = medium_.size[1];
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
@@ -782,27 +796,39 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax) {
   double inflowSum = 0;
   for (const auto& e : inflow) inflowSum += e.second;
   const double scale = inflowSum > 0 ? flowRate / inflowSum : 0.0;
-  std::vector<std::pair<std::size_t, double>> excess;
   inflow_.clear();
-  for (const auto& [c, q] : inflow) {
-    if (q <= 0) continue;
-    inflow_.push_back({c, q * scale});
+  for (const auto& [c, q] : inflow)
+    if (q > 0) inflow_.push_back({c, q * scale});
+  const double taken = std::min(dt, stopAfter);
+  pendingDt_ = dt - taken > 1e-9 * dt ? dt - taken : 0.0;
+  pendingFlowRate_ = flowRate;
+  advanceFill(flowRate, taken);
+  if (flowRate > 0 && inflowSum <= 0)
+    throw FillingError("voxel Darcy: the cement cannot enter the pore space at t = " + std::to_string(time_) + " s");
+  return taken;
+}
+
+void VoxelDarcyFilling::advanceFill(double flowRate, double dt) {
+  std::vector<std::pair<std::size_t, double>> excess;
+  for (const auto& [c, q] : inflow_) {
     wet(c);
     const VoxelBricks::Cell cell = bricks_.find(c);
+    // (filled already: by the part of this step before an output time, or by another voxel's excess)
+    const bool wasFilled = cell.has(VoxelBricks::kFilledFlag);
     double& voxelFill = cell->fill;
-    voxelFill += q * scale * dt / poreVolume(c);
+    voxelFill += q * dt / poreVolume(c);
     if (voxelFill > 1.0) excess.push_back({c, (voxelFill - 1.0) * poreVolume(c)});
-    if (voxelFill >= 1.0 - 1e-12) markFilled(c);
+    if (voxelFill >= 1.0 - 1e-12) {
+      if (wasFilled) voxelFill = 1.0;
+      else markFilled(c);
+    }
   }
   time_ += dt;
   injected_ += flowRate * dt;
-  if (flowRate > 0 && inflowSum <= 0)
-    throw FillingError("voxel Darcy: the cement cannot enter the pore space at t = " + std::to_string(time_) + " s");
   for (const auto& [c, e] : excess) depositExcess(c, e);
   ++stats_.steps;
   stats_.bricks = bricks_.allocated();
   stats_.brickBytes = bricks_.bytes();
-  return dt;
 }
 
 } // namespace cementsph::voxeldarcy

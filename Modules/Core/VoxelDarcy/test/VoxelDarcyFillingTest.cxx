@@ -466,6 +466,52 @@ TEST(VoxelDarcySolver, ActiveSetBookkeepingAgreesWithDensePassesAndTheRegionDoes
   EXPECT_NEAR(a.sourcePressure(), b.sourcePressure(), 1e-6 * a.sourcePressure());
 }
 
+// Output times (stopAfter) end a call, not the step (issue 23: 1 s snapshots had added half again as many
+// pressure solves at 10 ml). Oracle: the same filling without output times. Within a step the inflows are
+// constant, so the run stopped at outputs takes the same steps; what may differ is only where a voxel's
+// overshoot beyond full goes (at the output time instead of the step's end), which moves a few voxels' fill.
+// A third run that ends its step at every output (the old way) shows the solves saved.
+TEST(VoxelDarcySolver, OutputTimesDoNotAddPressureSolvesOrChangeTheFilling) {
+  const VoxelMedium medium = heterogeneous(21, 7);
+  VoxelDarcyFilling plain(medium), stopped(medium), shortened(medium);
+  for (VoxelDarcyFilling* f : {&plain, &stopped, &shortened}) {
+    f->setSource(Eigen::Vector3d::Zero(), 1.05e-3);
+    f->setViscosity(kMu);
+  }
+  const double volume = 0.04e-6, T = volume / kQ, every = 0.0137; // outputs not a multiple of any step
+  auto nextOutput = [&](double t) { return every * std::floor(t / every + 1 + 1e-9); };
+  while (plain.time() < T * (1 - 1e-12)) plain.step(kQ, 0.05, T - plain.time());
+  int calls = 0;
+  while (stopped.time() < T * (1 - 1e-12)) {
+    stopped.step(kQ, 0.05, std::min(T, nextOutput(stopped.time())) - stopped.time());
+    ASSERT_NEAR(stopped.cementVolume(), stopped.injectedVolume(), 1e-9 * volume) << "call " << calls;
+    ASSERT_LT(++calls, 100000);
+  }
+  while (shortened.time() < T * (1 - 1e-12))
+    shortened.step(kQ, std::min({0.05, nextOutput(shortened.time()) - shortened.time(), T - shortened.time()}));
+  const std::size_t solves = stopped.statistics().solves, plainSolves = plain.statistics().solves;
+  std::printf("output times: %zu calls, %zu solves; without outputs %zu solves; steps ended at outputs %zu solves\n",
+              stopped.statistics().steps, solves, plainSolves, shortened.statistics().solves);
+  EXPECT_GT(stopped.statistics().steps, solves + 5); // outputs did stop calls inside steps
+  // The same steps but for an overshoot's destination now and then: within 5 % of the plain run's solves,
+  // and fewer than the run that ends its steps at outputs.
+  EXPECT_LE(double(solves), 1.05 * double(plainSolves));
+  EXPECT_GE(double(solves), 0.95 * double(plainSolves));
+  EXPECT_LT(solves, shortened.statistics().solves);
+  // The filling: the volume exactly, the tip pressure and the cement's voxels as the plain run's (0.5 %, and a
+  // fill difference summed over the voxels of under 2 % of the cement's pore volume).
+  EXPECT_NEAR(stopped.cementVolume(), volume, 1e-9 * volume);
+  EXPECT_NEAR(stopped.sourcePressure(), plain.sourcePressure(), 5e-3 * plain.sourcePressure());
+  double moved = 0, held = 0;
+  for (std::size_t c = 0; c < medium.count(); ++c) {
+    moved += std::abs(stopped.fill()[c] - plain.fill()[c]) * medium.porosity[c] * medium.voxelVolume();
+    held += plain.fill()[c] * medium.porosity[c] * medium.voxelVolume();
+  }
+  std::printf("output times: fill moved %.3g %% of the cement; tip pressure %.6g Pa against %.6g Pa\n",
+              100 * moved / held, stopped.sourcePressure(), plain.sourcePressure());
+  EXPECT_LT(moved, 0.02 * held);
+}
+
 TEST(VoxelBricks, IndexArithmeticAgreesWithDivisionAndNeighboursWithLookups) {
   // Sizes with an axis of one voxel (the inverse of 1 is the special case), not multiples of the brick's 8,
   // and one whose index needs all of 32 bits' reach in the last plane.

@@ -41,6 +41,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -285,7 +286,14 @@ public:
 
   // Advances by at most dtMax [s] at the flow rate [m^3/s]; returns the step taken (> 0). Throws FillingError
   // when the cement has nowhere to go.
-  double step(double flowRate, double dtMax);
+  // `stopAfter` [s] ends this call early without shortening the step (an output time, e.g. a snapshot's):
+  // the step's length is chosen from dtMax and the fill limit as without it, the filling advances by
+  // min(step, stopAfter), and the next call goes on with the rest of the step at the same inflows, without a
+  // new pressure solve, as long as its flow rate is the same and nothing else changed the medium or the
+  // outlet (openVoxels, setSource, setEntryPressure, setVoxelViscosity start a fresh step). Within a step
+  // the inflows are constant (explicit in time), so a run stopped at output times takes the steps a run
+  // without them takes: its pressure solves do not multiply with the outputs.
+  double step(double flowRate, double dtMax, double stopAfter = std::numeric_limits<double>::infinity());
 
   // The state.
   const VoxelMedium& medium() const { return medium_; }
@@ -351,6 +359,8 @@ private:
     return cell.brick ? cell->faceFlux[axis] : 0.0f;
   }
   void depositExcess(std::size_t from, double volume);
+  // Fills the front voxels by the last solve's inflows (inflow_) for dt at the flow rate; moves the time on.
+  void advanceFill(double flowRate, double dt);
   void updateShearViscosity();
   void markFilled(std::size_t c);
   void wet(std::size_t c); // the first cement in a voxel: its arrival time, the list of voxels with cement
@@ -364,6 +374,8 @@ private:
   std::vector<double> voxelViscosity_;  // setVoxelViscosity's values (empty: not used)
   std::vector<std::size_t> source_;
   double time_ = 0.0, injected_ = 0.0;
+  // The rest of a step that a call's stopAfter cut short [s] (0: none) and its flow rate [m^3/s].
+  double pendingDt_ = 0.0, pendingFlowRate_ = 0.0;
   FillingStatistics stats_;
   std::vector<float> entryPressure_;  // per voxel [Pa]; empty: no capillary entry
   std::vector<std::pair<std::size_t, double>> inflow_; // the last step's inflow per front voxel [m^3/s]
