@@ -39,14 +39,35 @@ void addDrrGeometryOptions(CLI::App& sub, DrrGeometryArgs& a, const std::string&
   sub.add_option("--threads", a.threads, "OpenMP threads (0: the cores the load average leaves free)")->capture_default_str();
 }
 
+namespace {
+
+// The geometry's own words name the quantity; the user typed an option: name it first.
+[[noreturn]] void refuseGeometry(const std::string& problem) {
+  const char* option = problem.find("source-image") != std::string::npos   ? "--sid-mm"
+                       : problem.find("source-axis") != std::string::npos  ? "--sad-mm"
+                       : problem.find("pixels") != std::string::npos       ? "--detector-pixels"
+                       : problem.find("detector size") != std::string::npos ? "--detector-size-mm"
+                                                                            : "";
+  throw std::runtime_error(*option ? std::string(option) + ": " + problem : problem);
+}
+
+} // namespace
+
 drr::DRRGeometry checkedGeometry(const DrrGeometryArgs& a) {
   if (a.threads < 0) throw std::runtime_error("--threads must be 0 or more");
+  // A flat-panel detector has about 3000 pixels a side: 8192 leaves room, and 46341 x 46341 (2^31 pixels, 8 GB
+  // of doubles) ran for minutes before running out of memory.
+  constexpr int kMaxDetectorPixels = 8192;
+  if (a.pixels[0] > kMaxDetectorPixels || a.pixels[1] > kMaxDetectorPixels)
+    throw std::runtime_error("--detector-pixels " + std::to_string(a.pixels[0]) + "," + std::to_string(a.pixels[1]) +
+                             ": at most " + std::to_string(kMaxDetectorPixels) +
+                             " a side (a flat-panel detector has about 3000)");
   drr::DRRGeometry g = a.geometry;
   g.rows = a.pixels[0];
   g.cols = a.pixels[1];
   g.heightMm = a.sizeMm[0];
   g.widthMm = a.sizeMm[1];
-  if (const std::string problem = g.validate(); !problem.empty()) throw std::runtime_error(problem);
+  if (const std::string problem = g.validate(); !problem.empty()) refuseGeometry(problem);
   return g;
 }
 

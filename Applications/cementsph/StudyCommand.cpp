@@ -105,6 +105,15 @@ void checkArgs(const StudyArgs& a) {
   if (a.noRegistration && a.referenceCt.empty()) throw std::invalid_argument("--no-registration needs --reference-ct");
   if (!a.referenceCt.empty() && a.noSizeStudy)
     throw std::invalid_argument("--reference-ct scores the size study, but --no-size-study turns it off");
+  // Each radius, integrator and viscosity is a full injection: a sweep of 1e5 viscosities spent minutes in
+  // the start checks alone. The paper's figures use 5 radii and 4 viscosities.
+  constexpr std::size_t kMaxSweep = 100;
+  for (const auto& [option, count] : {std::pair<const char*, std::size_t>{"--radii-mm", a.radiiMm.size()},
+                                      {"--integrators", a.integrators.size()},
+                                      {"--viscosities-pa-s", a.viscositiesPaS.size()}})
+    if (count > kMaxSweep)
+      throw std::invalid_argument(std::string(option) + ": " + std::to_string(count) + " values; at most " +
+                                  std::to_string(kMaxSweep) + " (each is a full injection)");
 }
 
 // Everything that can be checked before a run: options, scene, output folder, CT, reference.

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <stdexcept>
 
@@ -110,6 +111,18 @@ cementsph::app::CommandRunner setupViscosity(CLI::App& sub) {
                  "cannula gauge instead of the inner diameter (nominal, TubeFlow.h): " +
                      cementsph::sph::knownCannulaGauges() + "; thin wall also as 10GTW");
   sub.add_flag("--json", o->json, "print one JSON object (pressure_drop_pa, ...)");
+  // 0 stands for "not given" in these four, so a 0 typed by the user silently chose another mode
+  // (`--pressure-drop-mpa 1 --flow-index 0` printed a Newtonian viscosity): given, they must be positive.
+  for (const char* name : {"--pressure-drop-mpa", "--viscosity-pa-s", "--consistency-pa-s-n", "--flow-index"})
+    sub.get_option(name)->check(CLI::Validator(
+        [](std::string& value) -> std::string {
+          char* end = nullptr;
+          if (!(std::strtod(value.c_str(), &end) > 0)) return "must be positive (got '" + value.substr(0, 40) + "')";
+          return {};
+        },
+        "", "positive"));
+  // The gauge sets the diameter: both given, one was silently ignored.
+  sub.get_option("--cannula-gauge")->excludes("--cannula-inner-diameter-mm");
   return [o] { return runViscosity(*o); };
 }
 

@@ -16,6 +16,7 @@
 #include <new>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -53,7 +54,10 @@ void capThreadsOption(CLI::App& sub) {
 
 // Every floating-point option of every subcommand takes finite numbers only: CLI11's ranges let NaN through (a
 // comparison with NaN is false), and a NaN or infinite radius, threshold or time must never reach the modules
-// (`compare --injection-search-radius-mm nan` once wrote a cement volume of 0).
+// (`compare --injection-search-radius-mm nan` once wrote a cement volume of 0). A subnormal value (below
+// DBL_MIN, 2.2e-308, but not 0) is refused too: no length, time, volume, pressure or viscosity in the units
+// the options name comes near it, and it turned into infinities further on that blamed another option
+// (`inject --viscosity-pa-s 1e-320`: "no finite time step").
 void requireFiniteNumbers(CLI::App& sub) {
   for (CLI::Option* option : sub.get_options()) {
     if (option->get_type_name().find("FLOAT") == std::string::npos) continue;
@@ -63,12 +67,29 @@ void requireFiniteNumbers(CLI::App& sub) {
           const double x = std::strtod(value.c_str(), &end);
           if (end != value.c_str() && !std::isfinite(x))
             return "must be a finite number (got '" + value.substr(0, 40) + "')";
+          if (end != value.c_str() && x != 0 && std::fabs(x) < DBL_MIN)
+            return "'" + value.substr(0, 40) + "' is below 2.2e-308 (a subnormal number) and not 0: no quantity in "
+                   "this option's unit is that small; give 0 or a real value";
           return {};
         },
         "", "finite"));
   }
 }
 
+// An option given an empty value ('--shell-mm ""', '--out ""') is refused: CLI11 reads "" as the number 0 or
+// an empty path, so the run went on with a value nobody typed (a shell of 0 mm; `inject --out ""` wrote its
+// files into the current folder).
+void refuseEmptyValues(CLI::App& sub) {
+  for (CLI::Option* option : sub.get_options()) {
+    if (option->get_type_name().empty()) continue; // a flag: takes no value
+    option->check(CLI::Validator(
+        [](std::string& value) -> std::string {
+          if (value.find_first_not_of(" \t") == std::string::npos) return "is empty: give a value";
+          return {};
+        },
+        "", "not empty"));
+  }
+}
 } // namespace
 
 std::vector<Command>& CommandRegistry::commands() {
@@ -128,6 +149,7 @@ std::map<CLI::App*, cementsph::app::CommandRunner> addSubcommands(CLI::App& app,
     CLI::App* sub = app.add_subcommand(command.name, command.summary);
     runners[sub] = command.setup(*sub);
     capThreadsOption(*sub);
+    refuseEmptyValues(*sub);
     requireFiniteNumbers(*sub);
     if (!sub->get_option_no_throw("--quiet"))
       sub->add_flag("--quiet", *quiet, "Print nothing but errors (the files are written as usual)");

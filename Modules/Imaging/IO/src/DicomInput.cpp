@@ -186,6 +186,8 @@ std::optional<DicomHeader> readDicomHeader(const std::string& path) {
     h.rows = integer(value(0x0028, 0x0010), 0);
     h.columns = integer(value(0x0028, 0x0011), 0);
     h.bitsAllocated = integer(value(0x0028, 0x0100), 0);
+    h.bitsStored = integer(value(0x0028, 0x0101), 0);
+    h.highBit = integer(value(0x0028, 0x0102), -1);
     h.position = numbers<3>(value(0x0020, 0x0032));
     h.orientation = numbers<6>(value(0x0020, 0x0037));
     h.pixelSpacing = numbers<2>(value(0x0028, 0x0030));
@@ -236,6 +238,14 @@ std::string ctSliceProblem(const DicomHeader& h) {
            std::to_string(h.columns) + " columns need " + std::to_string(h.pixelDataBytesNeeded) +
            " (truncated or damaged slice); export the series again";
   if (!h.hasPixelData) return "no pixel data, or fewer bytes than its rows and columns need (truncated?)";
+  // Bits Stored and High Bit say which bits of each Bits Allocated word hold the value: more stored bits than
+  // allocated, or a high bit outside the word or below the stored bits, is no layout (GDCM read such slices
+  // with some layout of its own choosing, silently).
+  if (h.bitsAllocated > 0 && (h.bitsStored > h.bitsAllocated || (h.highBit >= 0 && (h.highBit >= h.bitsAllocated ||
+                                                                                    h.highBit + 1 < h.bitsStored))))
+    return "Bits Stored " + std::to_string(h.bitsStored) + " / High Bit " + std::to_string(h.highBit) +
+           " do not fit its Bits Allocated " + std::to_string(h.bitsAllocated) +
+           " (damaged header), so its values are unknown; export the series again";
   // HU = Rescale Slope x stored value + Rescale Intercept: a slope that is not a number, or zero (every
   // voxel the intercept), or an intercept that is not a number makes every HU of the slice wrong.
   if (!h.rescaleSlope.empty() || !h.rescaleIntercept.empty()) {

@@ -484,6 +484,18 @@ void checkMetaHeader(const std::string& path) {
     if (std::none_of(std::begin(kScalarTypes), std::end(kScalarTypes), [&](const char* t) { return type == t; }))
       refuse(path, "ElementType = " + shownValue(type) + " is not one number per voxel (MET_SHORT, MET_FLOAT, ...)");
   }
+  // Only a binary image: ObjectType names what the file holds (a Mesh, Tube, ... is no volume), and text voxels
+  // (BinaryData = False) are parsed by MetaIO without any check of their count or values (binary bytes read as
+  // text became a volume without a word).
+  if (const auto v = field("objecttype"); v && lower(trim(*v)) != "image")
+    refuse(path, "ObjectType = " + shownValue(*v) + ": not an image (a CT has ObjectType = Image)");
+  if (const auto v = field("binarydata"); v && lower(trim(*v)) != "true")
+    refuse(path, "BinaryData = " + shownValue(*v) + ": text (ASCII) voxels are not read, as their values cannot be "
+                 "checked; save the volume as binary MetaImage (BinaryData = True)");
+  if (const auto v = field("binarydatabyteordermsb"); v && lower(trim(*v)) != "true" && lower(trim(*v)) != "false")
+    refuse(path, "BinaryDataByteOrderMSB = " + shownValue(*v) + " is neither True nor False, so the byte order is unknown");
+  if (const auto v = field("elementbyteordermsb"); v && lower(trim(*v)) != "true" && lower(trim(*v)) != "false")
+    refuse(path, "ElementByteOrderMSB = " + shownValue(*v) + " is neither True nor False, so the byte order is unknown");
   if (const auto v = field("elementnumberofchannels")) {
     const auto c = toInteger(trim(*v));
     if (!c || *c != 1)
@@ -676,6 +688,21 @@ void checkNrrdHeader(const std::string& path) {
     for (const auto& d : nrrdVectors(path, "space origin", *v))
       for (double x : d.value_or(std::vector<double>{}))
         if (!std::isfinite(x)) refuse(path, "space origin: " + shownValue(*v) + " is not a finite position");
+  // byte skip: -1 means "the data are the file's last bytes", which the format allows for raw data only; any
+  // other negative skip is no position (teem read such files without a word). line skip: a count.
+  for (const char* key : {"byte skip", "byteskip"})
+    if (const auto v = field({key})) {
+      const auto skip = toInteger(trim(*v));
+      const std::string encoding = lower(trim(field({"encoding"}).value_or("raw")));
+      if (!skip || *skip < -1 || (*skip == -1 && encoding != "raw"))
+        refuse(path, std::string(key) + ": " + shownValue(*v) + " must be a byte count >= 0, or -1 (data at the end) "
+                     "with raw encoding only");
+    }
+  for (const char* key : {"line skip", "lineskip"})
+    if (const auto v = field({key})) {
+      const auto skip = toInteger(trim(*v));
+      if (!skip || *skip < 0) refuse(path, std::string(key) + ": " + shownValue(*v) + " must be a line count >= 0");
+    }
   (void)nrrdDataFiles(path, h);
 }
 
@@ -750,8 +777,14 @@ void checkNifti(const std::string& path) {
   std::memcpy(&sizeofHdr, header, 4);
   const std::uint32_t swappedSize = ((sizeofHdr & 0xffu) << 24) | ((sizeofHdr & 0xff00u) << 8) |
                                     ((sizeofHdr >> 8) & 0xff00u) | (sizeofHdr >> 24);
-  if (sizeofHdr != kNiftiHeaderBytes && swappedSize != kNiftiHeaderBytes)
-    return; // not NIfTI-1 (NIfTI-2, Analyze variants): nifti_io decides
+  if (sizeofHdr != kNiftiHeaderBytes && swappedSize != kNiftiHeaderBytes) {
+    // NIfTI-2 (sizeof_hdr 540, magic "n+2" or "ni2" at byte 4): nifti_io checks it. Any other size is damage:
+    // nifti_io took a NIfTI-1 layout with sizeof_hdr 540 for a volume.
+    const std::string magic2(reinterpret_cast<const char*>(header + 4), 3);
+    if ((sizeofHdr == 540 || swappedSize == 540) && (magic2 == "n+2" || magic2 == "ni2")) return;
+    refuse(path, "NIfTI sizeof_hdr is " + std::to_string(sizeofHdr) + ", neither NIfTI-1's 348 nor NIfTI-2's 540 with "
+                 "its magic (damaged header, or not NIfTI); export it again");
+  }
   const bool swapped = sizeofHdr != kNiftiHeaderBytes;
   auto field = [&](std::size_t at, std::size_t bytes, void* out) {
     unsigned char b[8];
@@ -781,11 +814,23 @@ void checkNifti(const std::string& path) {
   if (voxelBytes == 0) refuse(path, "NIfTI datatype " + std::to_string(datatype) + " is not a known voxel type (damaged header?)");
   for (int i = 1; i <= std::min(dims[0], 3); ++i)
     requireSpacing(path, "NIfTI pixdim[" + std::to_string(i) + "] =", floatAt(76 + 4 * std::size_t(i)));
+  // bitpix (72) must match the datatype: nifti_io replaces a wrong one silently, so which of the two was meant
+  // is unknown.
+  if (const int bitpix = shortAt(72); std::uintmax_t(std::max(bitpix, 0)) != voxelBytes * 8)
+    refuse(path, "NIfTI bitpix " + std::to_string(bitpix) + " does not match datatype " + std::to_string(datatype) + " (" +
+                     std::to_string(voxelBytes * 8) + " bits per voxel; damaged header?)");
   const int qformCode = shortAt(252), sformCode = shortAt(254);
-  if (qformCode > 0)
+  if (qformCode > 0) {
     for (std::size_t at = 256; at < 280; at += 4)
       if (!std::isfinite(floatAt(at)))
         refuse(path, "NIfTI qform (quatern_b/c/d, qoffset) is not finite (damaged header?); the orientation is unknown");
+    // A unit quaternion has b^2 + c^2 + d^2 <= 1 (a = sqrt(1 - that)); nifti_io rescales a larger (b, c, d) to
+    // length 1 without a word, a rotation nobody wrote. 1e-5 leaves room for the floats' rounding.
+    const double b = floatAt(256), c = floatAt(260), d = floatAt(264);
+    if (!(b * b + c * c + d * d <= 1.0 + 1e-5))
+      refuse(path, "NIfTI qform quaternion (quatern_b/c/d " + number(b) + ", " + number(c) + ", " + number(d) +
+                       ") has b^2 + c^2 + d^2 > 1, so it is no rotation (damaged header?)");
+  }
   if (sformCode > 0) {
     double m[12];
     for (std::size_t k = 0; k < 12; ++k) m[k] = floatAt(280 + 4 * k);
@@ -810,6 +855,17 @@ void checkNifti(const std::string& path) {
   const double voxOffset = floatAt(108);
   const std::string magic(reinterpret_cast<const char*>(header + 344), 3);
   const bool pair = magic != "n+1";
+  // A single .nii(.gz) file must say it is NIfTI-1 ("n+1"): without the magic nifti_io reads it as Analyze
+  // 7.5, whose orientation fields mean something else.
+  {
+    const std::string name = lower(fs::path(path).filename().string());
+    const bool singleFile = name.size() > 4 && (name.substr(name.size() - 4) == ".nii" ||
+                                                (name.size() > 7 && name.substr(name.size() - 7) == ".nii.gz"));
+    if (singleFile && pair)
+      refuse(path, "NIfTI magic is " + shownValue(std::string(reinterpret_cast<const char*>(header + 344),
+                                                               strnlen(reinterpret_cast<const char*>(header + 344), 4))) +
+                       ", not 'n+1' (a damaged header, or an Analyze file named .nii); export it again as NIfTI");
+  }
   const double minOffset = pair ? 0.0 : double(kNiftiHeaderBytes);
   if (!(voxOffset >= minOffset && voxOffset < 9e15) || voxOffset != std::floor(voxOffset))
     refuse(path, "NIfTI vox_offset " + number(voxOffset) + " is not a byte position of the voxels (a whole number >= " +

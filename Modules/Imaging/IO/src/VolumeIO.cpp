@@ -252,6 +252,11 @@ ImageType::Pointer readVolumeFile(const std::string& path) {
 ImageType::Pointer readVolume(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw std::runtime_error(path + ": no such file or directory");
+  // A pipe, device or socket is refused before anything opens it: opening a FIFO with no writer blocks forever
+  // (`--ct fifo.nrrd` hung), and /dev/zero never ends.
+  if (!fs::is_directory(path, ec) && !fs::is_regular_file(path, ec))
+    throw std::runtime_error(path + ": not a regular file (a pipe, device or socket); give a volume file (.nrrd, .mha, "
+                                    ".nii, .nii.gz) or a DICOM folder");
   ImageType::Pointer image;
   try {
     image = fs::is_directory(path, ec) ? readDicomSeries(path) : readVolumeFile(path);

@@ -509,4 +509,82 @@ TEST(HostileDicom, RescaleThatIsNotAFiniteNonZeroNumberIsRefused) {
   }
 }
 
+// Issue 21, second corpus: header fields that the readers "corrected" without a word. Each file is the valid
+// one written here with one field changed; each refusal names the field.
+TEST(HostileNifti, QuaternionMagicSizeofAndBitpixThatNiftiIoRepairsAreRefused) {
+  const fs::path dir = scratch("nifti-repairs");
+  const NiftiField nii(dir);
+  // qform_code (252) = 1 with quatern_b (256) = 0.9, c = d = 0.9: b^2 + c^2 + d^2 = 2.43 > 1, which nifti_io
+  // rescales to a rotation nobody wrote.
+  {
+    std::string b = nii.bytes();
+    const std::int16_t one = 1;
+    const float quaternion[3] = {0.9f, 0.9f, 0.9f};
+    std::memcpy(&b[252], &one, 2);
+    std::memcpy(&b[256], quaternion, sizeof quaternion);
+    writeFile(dir / "quaternion.nii", b);
+    expectRefused(dir / "quaternion.nii", "quaternion");
+  }
+  // magic (344) "xyz": nifti_io reads the .nii as Analyze 7.5.
+  {
+    std::string b = nii.bytes();
+    std::memcpy(&b[344], "xyz", 4);
+    writeFile(dir / "magic.nii", b);
+    expectRefused(dir / "magic.nii", "magic");
+  }
+  // sizeof_hdr (0) 540 (NIfTI-2's) on a NIfTI-1 layout, and 1000.
+  expectRefused(nii.with(0, std::int32_t(540)), "sizeof_hdr");
+  expectRefused(nii.with(0, std::int32_t(1000)), "sizeof_hdr");
+  // bitpix (72) 8 for float32 voxels (datatype 16 needs 32).
+  expectRefused(nii.with(72, std::int16_t(8)), "bitpix");
+  // The valid file is still read exactly.
+  expectValues(dir / "valid.nii", 0.5);
+}
+
+TEST(HostileMetaImage, ObjectTypeTextVoxelsAndByteOrderThatMetaIoGuessesAreRefused) {
+  const fs::path dir = scratch("meta-guesses");
+  expectRefused(metaCase(dir, "mesh.mhd", "ObjectType = Mesh", "all.raw"), "ObjectType");
+  expectRefused(metaCase(dir, "text.mhd", "BinaryData = False", "all.raw"), "BinaryData");
+  expectRefused(metaCase(dir, "order.mhd", "ElementByteOrderMSB = Maybe", "all.raw"), "ElementByteOrderMSB");
+  expectRefused(metaCase(dir, "border.mhd", "BinaryDataByteOrderMSB = 2", "all.raw"), "BinaryDataByteOrderMSB");
+  expectValues(metaCase(dir, "binary.mhd", "BinaryData = True", "all.raw"), 0.5);
+}
+
+TEST(HostileNrrd, ByteAndLineSkipsThatAreNoPositionAreRefused) {
+  const fs::path dir = scratch("nrrd-skips");
+  const std::string data = bytesOf(voxels());
+  writeFile(dir / "all.raw", data);
+  // -2 is no position; -1 (the data are the file's last bytes) is for raw encoding only; a negative line skip.
+  for (const auto& [skip, encoding, field] :
+       {std::tuple{std::string("byte skip: -2"), std::string("raw"), std::string("byte skip")},
+        std::tuple{std::string("byte skip: -1"), std::string("gzip"), std::string("byte skip")},
+        std::tuple{std::string("byte skip: x"), std::string("raw"), std::string("byte skip")},
+        std::tuple{std::string("line skip: -3"), std::string("raw"), std::string("line skip")}}) {
+    writeFile(dir / "s.nhdr", nrrdHeader(kDirections, encoding, "all.raw") + skip + "\n\n");
+    expectRefused(dir / "s.nhdr", field);
+  }
+  // byte skip -1 with raw data is the format's own: the last bytes of the file are the voxels.
+  writeFile(dir / "prefixed.raw", std::string(100, 'x') + data);
+  writeFile(dir / "end.nhdr", nrrdHeader(kDirections, "raw", "prefixed.raw") + "byte skip: -1\n\n");
+  expectValues(dir / "end.nhdr", 0.5);
+}
+
+// Bits Stored (0028,0101) 20 in 16-bit words: no layout of the stored value. GDCM read it with one of its own.
+TEST(HostileDicom, BitsStoredBeyondBitsAllocatedIsRefusedNamingTheSlice) {
+  const fs::path dir = scratch("dicom-bits");
+  writeDicomSeries(testImage(), (dir / "series").string(), -1024.0);
+  const fs::path slice = sliceFiles(dir / "series")[2];
+  std::string bytes = readAll(slice);
+  const auto at = bytes.find(std::string("\x28\x00\x01\x01", 4));
+  ASSERT_NE(at, std::string::npos);
+  // The 2-byte value follows the tag and its length (explicit VR: 'US' + 2 bytes; implicit: 4 bytes).
+  std::uint16_t stored = 0;
+  std::memcpy(&stored, bytes.data() + at + 8, 2);
+  ASSERT_EQ(stored, 16u) << "the writer's 16-bit slices expected";
+  stored = 20;
+  std::memcpy(bytes.data() + at + 8, &stored, 2);
+  writeFile(slice, bytes);
+  expectSeriesRefused(dir / "series", slice, "Bits Stored");
+}
+
 } // namespace

@@ -7,7 +7,9 @@
 
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -45,6 +47,11 @@ constexpr double kMaxSnapshots = 10000.0;
 constexpr double kMaxViscosityPaS = 1e7;
 // Less than a cubic millimetre is below one voxel of any CT the program reads: no spreading to predict.
 constexpr double kMinVolumeMl = 1e-3;
+// Upper ends: a vertebral body holds about 30-50 ml and a kit's syringes 10-20 ml, so a litre is past any
+// injection; 1000 ml/s empties a 10 ml syringe in 10 ms. Beyond them a value is a typo or a unit slip, and an
+// unchecked 1e308 went on to blame another key ("volume_ml 1e308": "flow_rate_ml_per_s is too small").
+constexpr double kMaxVolumeMl = 1e3;
+constexpr double kMaxFlowRateMlPerS = 1e3;
 constexpr double kMinSoundSpeed = 1e-3, kMaxSoundSpeed = 1500.0;
 constexpr double kMinDrag = 1e-6, kMaxDrag = 1e6;
 
@@ -363,6 +370,18 @@ void SceneConfig::validate() const {
          << " ml (one cubic millimetre, below a CT voxel): give the volume in ml";
     fail("volume_ml", what.str());
   }
+  if (!(volumeMl <= kMaxVolumeMl)) {
+    std::ostringstream what;
+    what << "is too large: " << volumeMl << " ml is above " << kMaxVolumeMl
+         << " ml (a vertebral body holds 30-50 ml): give the volume in ml";
+    fail("volume_ml", what.str());
+  }
+  if (!(flowRateMlPerS <= kMaxFlowRateMlPerS)) {
+    std::ostringstream what;
+    what << "is too large: " << flowRateMlPerS << " ml/s is above " << kMaxFlowRateMlPerS
+         << " ml/s (clinical rates are 0.01-0.5 ml/s): give the rate in ml/s";
+    fail("flow_rate_ml_per_s", what.str());
+  }
   if (!(injectionDurationS() <= kMaxInjectionS)) {
     std::ostringstream what;
     what << "is too small: " << flowRateMlPerS << " ml/s takes " << injectionDurationS() << " s for volume_ml "
@@ -465,6 +484,14 @@ SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrid
 }
 
 SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings) {
+  // Only a regular file is opened: opening a FIFO with no writer blocks forever (`--scene fifo.json` hung), a
+  // folder opens and reads as nothing, and a device never ends.
+  {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw std::invalid_argument(path + ": no such scene file");
+    if (!std::filesystem::is_regular_file(path, ec))
+      throw std::invalid_argument(path + ": not a regular file (a folder, pipe or device); give the scene's JSON file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot open the scene file");
   // The whole file is the JSON object: read it all (a scene is a few kB; 16 MiB is far past any), and refuse
@@ -478,9 +505,24 @@ SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings
   if (const auto nul = text.find('\0'); nul != std::string::npos)
     throw std::invalid_argument(path + ": a NUL byte at offset " + std::to_string(nul) +
                                 ": not a text JSON file (damaged, or something appended to it)");
-  json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  // A key given twice in one object is refused: the parser keeps the last silently, so which of two
+  // volumes was injected depended on their order (the corpus of issue 21 found it accepted).
+  std::vector<std::set<std::string>> keysOfOpenObjects;
+  std::string duplicateKey;
+  const json::parser_callback_t noteDuplicates = [&](int, json::parse_event_t event, json& parsed) {
+    if (event == json::parse_event_t::object_start) keysOfOpenObjects.emplace_back();
+    else if (event == json::parse_event_t::object_end && !keysOfOpenObjects.empty()) keysOfOpenObjects.pop_back();
+    else if (event == json::parse_event_t::key && !keysOfOpenObjects.empty() && duplicateKey.empty() &&
+             !keysOfOpenObjects.back().insert(parsed.get<std::string>()).second)
+      duplicateKey = parsed.get<std::string>();
+    return true;
+  };
+  json j = json::parse(text, noteDuplicates, /*allow_exceptions=*/false);
   if (j.is_discarded())
     throw std::invalid_argument(path + ": not valid JSON (one object, nothing after it); check the file");
+  if (!duplicateKey.empty())
+    throw std::invalid_argument(path + ": key '" + duplicateKey.substr(0, 40) +
+                                "' appears twice in one object: keep the one you mean and remove the other");
   try {
     return sceneFromJson(j, settings);
   } catch (const std::invalid_argument& e) {

@@ -2,6 +2,7 @@
 #include "cementsph/scene/SceneConfig.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <filesystem>
@@ -520,4 +521,59 @@ TEST(SceneConfig, ViscosityAndVolumeOutsideTheirPhysicalRangeAreRefused) {
   json smallest = minimal();
   smallest["volume_ml"] = 1e-3;
   EXPECT_EQ(errorOf(smallest), "");
+}
+
+// Issue 21, second corpus: a key given twice in one object (the parser kept the last, silently), and the upper
+// ends of volume_ml (1000 ml, past any vertebra) and flow_rate_ml_per_s (1000 ml/s): a volume of 1e308 was
+// blamed on the flow rate ("takes inf s"). Each refusal is one line naming the file and the key at fault.
+TEST(SceneConfig, DuplicateKeysAndVolumesOrRatesPastAnyInjectionAreRefusedNamingTheKey) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-scene-duplicates";
+  std::filesystem::create_directories(dir);
+  const auto path = (dir / "scene.json").string();
+  auto errorOf = [&](const std::string& text) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+    try {
+      (void)loadSceneFile(path);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string tip = R"("tip_mm": [4, 5, 6])";
+  for (const auto& [text, key] : std::vector<std::pair<std::string, std::string>>{
+           {"{" + tip + R"(, "volume_ml": 1, "volume_ml": 2})", "volume_ml"},
+           {"{" + tip + R"(, "cement": "x", "tip_mm": [1, 2, 3]})", "tip_mm"},
+           {"{" + tip + R"(, "volume_ml": 1e308})", "volume_ml"},
+           {"{" + tip + R"(, "volume_ml": 1000.5})", "volume_ml"},
+           {"{" + tip + R"(, "flow_rate_ml_per_s": 1e308})", "flow_rate_ml_per_s"}}) {
+    const std::string e = errorOf(text);
+    EXPECT_EQ(e.rfind(path + ": ", 0), 0u) << text << ": " << e;
+    EXPECT_NE(e.find("'" + key + "'"), std::string::npos) << text << ": " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    if (key != "flow_rate_ml_per_s") {
+      EXPECT_EQ(e.find("flow_rate_ml_per_s"), std::string::npos) << e;
+    }
+  }
+  // The same key in two different objects is not a duplicate, and the limits themselves are accepted.
+  EXPECT_EQ(errorOf("{" + tip + R"(, "volume_ml": 1000, "flow_rate_ml_per_s": 1000})"), "no error");
+  EXPECT_EQ(errorOf("{" + tip + R"(, "label_table": {"1": "bone"}, "labels_path": "x.nrrd"})").find("appears twice"),
+            std::string::npos);
+}
+
+// A FIFO with no writer would block the open forever, a folder reads as nothing: both refused at once naming
+// the path (the test would hang, not fail, if the FIFO were opened).
+TEST(SceneConfig, AFifoOrFolderGivenAsTheSceneIsRefusedWithoutOpeningIt) {
+  const auto dir = std::filesystem::temp_directory_path() / "cementsph-scene-fifo";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string fifo = (dir / "scene.json").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& path : {fifo, dir.string()}) {
+    try {
+      (void)loadSceneFile(path);
+      ADD_FAILURE() << path << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + ": not a regular file", 0), 0u) << e.what();
+    }
+  }
 }

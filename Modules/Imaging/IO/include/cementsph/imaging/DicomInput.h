@@ -21,6 +21,7 @@ struct DicomHeader {
   std::string mediaStorageSopClass; // (0002,0002); "1.2.840.10008.1.3.10" is a DICOMDIR
   std::string sopClass, seriesUid, modality, photometric;
   int samplesPerPixel = 0, frames = 1, rows = 0, columns = 0, bitsAllocated = 0;
+  int bitsStored = 0, highBit = -1; // (0028,0101), (0028,0102); 0 and -1 when absent
   bool hasPixelData = false;
   // Uncompressed pixel data: the element's length and what rows x columns x samples x bytes x frames need.
   std::uintmax_t pixelDataBytes = 0, pixelDataBytesNeeded = 0;
