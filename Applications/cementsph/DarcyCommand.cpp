@@ -7,6 +7,7 @@
 #include "cementsph/sph/DarcyBenchmark.h"
 #include "cementsph/sph/DarcyTable.h"
 #include "cementsph/sph/Presets.h"
+#include "cementsph/study/DarcyPlot.h"
 
 #include <omp.h>
 
@@ -133,7 +134,7 @@ int runDarcy(const DarcyOptions& o) {
   std::cout << "wrote " << csvPath.string() << "\n";
   if (!o.noPlot) {
     const std::filesystem::path png = std::filesystem::path(o.out) / "permeability.png";
-    app::writeDarcyPlot(results, png);
+    cementsph::study::writeDarcyPlot(results, png);
     std::cout << "wrote " << png.string() << "\n";
   }
   bool allConverged = true;

@@ -25,7 +25,6 @@
 #include "cementsph/scene/SceneConfig.h"
 #include "vtkSPHInjectionFilter.h"
 
-#include <nlohmann/json.hpp>
 #include <vtkImageData.h>
 #include <vtkSmartPointer.h>
 
@@ -82,7 +81,6 @@ namespace cementsph::app {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 // What a run gives the pictures: its typed result (summary, outlet series; InjectionRunner.h), and its simulated CT
 // and cement label map on the input CT's grid (the filter's output ports 0 and 1; the same voxels as

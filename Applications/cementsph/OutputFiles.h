@@ -8,10 +8,6 @@
 #include <utility>
 #include <vector>
 
-namespace cementsph::sph {
-struct DarcyResult;
-}
-
 namespace cementsph::app {
 
 // The picture steps of a command, after its numbers are written: a picture that fails is one line on stderr
@@ -43,7 +39,5 @@ private:
 void checkOutputFolder(const std::filesystem::path& out);
 
 void writeFileAtomically(const std::filesystem::path& path, const std::string& contents);
-// Dimensionless permeability against porosity with the Kozeny-Carman curve (paper Fig. 5).
-void writeDarcyPlot(const std::vector<sph::DarcyResult>& results, const std::filesystem::path& png);
 
 } // namespace cementsph::app

@@ -23,7 +23,6 @@
 #include "cementsph/drr/XraySequence.h"
 #include "cementsph/drr/XraySequenceComparison.h"
 #include "cementsph/drr/XraySequenceFiles.h"
-#include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/StagedFolder.h"
 #include "cementsph/imaging/VolumeIO.h"
@@ -306,8 +305,7 @@ int runXray(const XrayRequest& a, drr::XrayHeadline* headline) {
   const fs::path dir = staged.path();
   writeDrrFrames(*run.sequence, "sequence", dir);
   if (run.reference) writeDrrFrames(*run.reference, "reference", dir);
-  imaging::writeTextAtomically((dir / "sequence.csv").string(),
-                               drr::xraySequenceCsv(*run.sequence, record.reference, record.comparison));
+  drr::writeXraySequenceCsv(*run.sequence, record.reference, record.comparison, dir / "sequence.csv");
   record.writeSeconds = secondsSince(t);
 
   // Pictures after the numbers; a failed picture is one line and exit status 3, as in `compare`.

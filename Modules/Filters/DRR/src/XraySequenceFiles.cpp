@@ -172,6 +172,11 @@ std::string xraySequenceCsv(const XraySequence& sequence, const XraySequence* re
   return csv.str();
 }
 
+void writeXraySequenceCsv(const XraySequence& sequence, const XraySequence* reference,
+                          const XrayComparison* comparison, const fs::path& file) {
+  imaging::writeTextAtomically(file.string(), xraySequenceCsv(sequence, reference, comparison));
+}
+
 std::vector<std::string> xrayComparisonWarnings(const XrayComparison* comparison) {
   if (!comparison) return {};
   const XrayFramePair* last = lastFramePair(*comparison);

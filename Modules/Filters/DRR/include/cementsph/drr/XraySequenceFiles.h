@@ -37,6 +37,9 @@ XrayFrameList readXrayFrameList(const std::vector<std::string>& values, const st
 // row per frame pair with the reference's columns and Dice / IoU (empty where a frame matched nothing).
 std::string xraySequenceCsv(const XraySequence& sequence, const XraySequence* reference,
                             const XrayComparison* comparison);
+// Writes it to file, atomically.
+void writeXraySequenceCsv(const XraySequence& sequence, const XraySequence* reference,
+                          const XrayComparison* comparison, const std::filesystem::path& file);
 
 // What a run did, for metrics.json.
 struct XrayRunRecord {
