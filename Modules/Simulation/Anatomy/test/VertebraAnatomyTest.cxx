@@ -519,6 +519,32 @@ TEST(VertebraAnatomy, LeakSitesByClassWithTheirVolume) {
   EXPECT_THROW(anatomy::classifyLeaks(ctAnatomy(), std::vector<double>(3, 0.0), {}, {}), std::invalid_argument);
 }
 
+// (g) Cement in the basivertebral vein outside the body (every voxel wholly inside the vein's outer segment, 2 mm
+// clear of the wall: Truth::inVeinOutside, from the phantom's layout) is leakage of its whole volume (exactly: none
+// of it is the target), reported as venous: the largest site is venous and holds at least 90 % of it (the rest:
+// the vein's partial-volume edge, classed soft tissue, a cortex_breach site).
+TEST(VertebraAnatomy, CementInTheVeinIsAVenousLeak) {
+  const auto& s = scene();
+  const auto& t = *s.truth;
+  std::vector<double> fill(s.grid.count(), 0.0);
+  std::size_t voxels = 0;
+  s.forEach([&](std::size_t n, const P&, const std::array<P, 8>& cs) {
+    if (!allCorners(cs, [&](const P& c) { return t.inVeinOutside(c); })) return;
+    fill[n] = 1.0;
+    ++voxels;
+  });
+  ASSERT_GT(voxels, 20u); // a 4 mm tube about 10 mm long at 1 x 1 x 1.5 mm voxels
+  const double ml = double(voxels) * s.grid.voxelVolumeMm3() / 1000.0;
+  const auto r = anatomy::classifyLeaks(ctAnatomy(), fill, {}, {});
+  std::printf("cement in the vein: %zu voxels, %.4f ml; leaked %.4f ml, venous %.4f ml in %zu sites\n", voxels, ml,
+              r.leakedMl, r.volumeMlByKind.at("venous"), r.sites.size());
+  EXPECT_NEAR(r.leakedMl, ml, 1e-12);
+  EXPECT_EQ(r.insideMl, 0.0);
+  ASSERT_FALSE(r.sites.empty());
+  EXPECT_EQ(r.sites[0].kind, "venous") << r.toJson().dump();
+  EXPECT_GE(r.volumeMlByKind.at("venous"), 0.9 * ml) << r.toJson().dump();
+}
+
 // (g) With a label map made from the analytic geometry, every labelled voxel carries its label's class (exact),
 // and the tip rules follow the labels.
 TEST(VertebraAnatomy, LabelMapGivesTheSameClasses) {
