@@ -442,6 +442,30 @@ Eigen::Vector3d VoxelDarcyFilling::darcyVelocity(std::size_t c) const {
   return q;
 }
 
+VoxelDarcyFilling::VoxelState VoxelDarcyFilling::voxelState(std::size_t c) const {
+  VoxelState s;
+  const auto v = bricks_.ijk(c);
+  const VoxelBricks::Cell own = bricks_.find(v[0], v[1], v[2]);
+  if (!own.brick) {
+    if (!voxelViscosity_.empty()) s.viscosity = voxelViscosity_[c];
+    return s;
+  }
+  const VoxelBricks::Voxel& x = *own.operator->();
+  s.fill = x.fill;
+  s.pressure = x.pressure;
+  s.viscosity = x.viscosity;
+  s.arrival = x.arrival;
+  for (int a = 0; a < 3; ++a) { // as darcyVelocity
+    double minus = 0;
+    if (v[std::size_t(a)] > 0) {
+      const VoxelBricks::Cell below = bricks_.neighbour(own, v, a, -1);
+      if (below.brick) minus = below->faceFlux[a];
+    }
+    s.darcyVelocity[a] = 0.5 * (double(x.faceFlux[a]) + minus) / faceArea_[std::size_t(a)];
+  }
+  return s;
+}
+
 void VoxelDarcyFilling::markFilled(std::size_t c) {
   const VoxelBricks::Cell cell = touch(c);
   cell.set(VoxelBricks::kFilledFlag, 1);

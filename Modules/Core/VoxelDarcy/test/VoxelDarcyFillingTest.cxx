@@ -510,6 +510,15 @@ TEST(VoxelDarcySolver, OutputTimesDoNotAddPressureSolvesOrChangeTheFilling) {
   std::printf("output times: fill moved %.3g %% of the cement; tip pressure %.6g Pa against %.6g Pa\n",
               100 * moved / held, stopped.sourcePressure(), plain.sourcePressure());
   EXPECT_LT(moved, 0.02 * held);
+  // voxelState (the snapshots' one lookup) against the per-field accessors, every voxel: the same values.
+  for (std::size_t c = 0; c < medium.count(); ++c) {
+    const VoxelDarcyFilling::VoxelState s = stopped.voxelState(c);
+    ASSERT_EQ(s.fill, stopped.fill()[c]) << "voxel " << c;
+    ASSERT_EQ(s.pressure, stopped.pressure()[c]) << "voxel " << c;
+    ASSERT_EQ(s.viscosity, stopped.viscosity()[c]) << "voxel " << c;
+    ASSERT_EQ(s.arrival, stopped.arrivalTime()[c]) << "voxel " << c;
+    ASSERT_EQ(s.darcyVelocity, stopped.darcyVelocity(c)) << "voxel " << c;
+  }
 }
 
 TEST(VoxelBricks, IndexArithmeticAgreesWithDivisionAndNeighboursWithLookups) {
