@@ -415,8 +415,8 @@ TEST(VertebraAnatomy, AtClinicalSliceThicknessAndNoise) {
   EXPECT_GE(vein.share(), 0.90) << vein.right << " of " << vein.inside;
 }
 
-// (e) A tip outside the target's bone is refused with one line naming the tissue; the body's centre and a point
-// in the enclosed marrow fat are accepted.
+// (e) A tip outside the target's bone (disc, canal, the vein outside the body, a fat pocket, an air pocket) is
+// refused with one line naming the tissue; the body's centre and a point in the enclosed marrow fat are accepted.
 TEST(VertebraAnatomy, TipsOutsideBoneAreRefusedByTissue) {
   const auto& s = scene();
   const auto& t = *s.truth;
@@ -440,8 +440,13 @@ TEST(VertebraAnatomy, TipsOutsideBoneAreRefusedByTissue) {
     const char* words;
   };
   const P discTip{t.c[0], t.c[1], 0.5 * (t.upper[0] + t.upper[1])};
+  // On the vein's axis 80 % of the way out: outside the body, clear of its wall's rim (Truth::inVeinOutside).
+  P veinTip;
+  for (int q = 0; q < 3; ++q) veinTip[q] = t.veinA[q] + 0.8 * (t.veinB[q] - t.veinA[q]);
+  ASSERT_TRUE(t.inVeinOutside(veinTip));
   for (const Case& k : {Case{discTip, TissueClass::Disc, "intervertebral disc"},
                         Case{t.canal, TissueClass::Canal, "spinal canal"},
+                        Case{veinTip, TissueClass::Vessel, "blood vessel"},
                         Case{fatOut, TissueClass::OtherSoftTissue, "soft tissue"},
                         Case{airOut, TissueClass::Air, "air"}}) {
     const auto a = anatomy::classifyAnatomyFromCT(hu.data(), s.grid, k.tip, s.ao);

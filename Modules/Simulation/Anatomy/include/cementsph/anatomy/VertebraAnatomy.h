@@ -37,8 +37,12 @@
 //  9. Air: HU < air_max_hu; everything else: other soft tissue.
 // Assumptions: the region holds the target vertebra with soft tissue around; the spine runs along patient z
 // within 45 degrees; the basivertebral vein inside the body is bone-band HU and belongs to the target.
-// Cost: linear in the voxels, about 2 s for 6.4 million (0.5 mm voxels over 100 x 100 x 80 mm, one core):
-// pass a region around the tip (a vertebra and its discs fit in 100 mm), not a whole scan.
+// Cost: linear in the voxels of the box that holds everything not air (below air_max_hu; the rest is classed air
+// without a pass of its own, the same classes as the rule on the whole grid), the hole fillings in the box of
+// what they fill; about 2 s for 6.4 million voxels before those cuts (0.5 mm voxels over 100 x 100 x 80 mm, one
+// core); since then (2026-12-03) VertebraAnatomyTest takes 0.65 s instead of 1.35 s and PlanObliqueTest's 19-injection
+// plan on a 200 x 70 x 200 mm field 1.23 s CPU instead of 2.26 s. Pass a region around the tip (a vertebra and its
+// discs fit in 100 mm), not a whole scan.
 #pragma once
 
 #include <nlohmann/json.hpp>
