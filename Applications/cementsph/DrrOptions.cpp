@@ -77,10 +77,27 @@ drr::DRRGeometry geometryForVolume(const DrrGeometryArgs& a, const std::array<do
     g.isocenterMm = {0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5])};
   else
     g.isocenterMm = {a.isocenterMm[0], a.isocenterMm[1], a.isocenterMm[2]};
+  // A cone beam's source must lie outside the volume, in front of all of it: one inside (--sad-mm 1e-300) drew
+  // a DRR of rays that start within the CT, without a word.
+  if (!g.parallel) {
+    const auto beam = g.beamDirection();
+    for (int c = 0; c < 8; ++c) {
+      const double rel[3] = {b[(c & 1) ? 1 : 0] - g.isocenterMm[0], b[(c & 2) ? 3 : 2] - g.isocenterMm[1],
+                             b[(c & 4) ? 5 : 4] - g.isocenterMm[2]};
+      if (!(g.sadMm + rel[0] * beam[0] + rel[1] * beam[1] + rel[2] * beam[2] > 0))
+        throw std::runtime_error("--sad-mm " + std::to_string(g.sadMm) + ": the source lies inside or behind the volume "
+                                 "(seen from the isocentre); give a --sad-mm larger than the volume's reach");
+    }
+  }
   try {
     if (fitDetector) g.fitDetectorTo(b, 1.1);
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(std::string("cannot fit the detector to the volume: ") + e.what());
+    // The geometry names no option (and its own name is no help): say which ones place the source.
+    std::string why = e.what();
+    if (why.rfind("fitDetectorTo: ", 0) == 0) why.erase(0, 15);
+    throw std::runtime_error("--sad-mm " + std::to_string(g.sadMm) + " with --isocenter-mm and --gantry-angle-deg: cannot fit "
+                             "the detector to the volume (" + why + "); give a larger --sad-mm or an isocentre "
+                             "inside the volume");
   }
   if (const std::string problem = g.validate(); !problem.empty()) throw std::runtime_error(problem);
   return g;

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <map>
@@ -73,6 +74,50 @@ void requireFiniteNumbers(CLI::App& sub) {
           return {};
         },
         "", "finite"));
+  }
+}
+
+// The largest magnitude an option's unit allows, by the unit its name ends in: beyond these no CT, cannula,
+// injection or X-ray geometry exists, and 1e308 went on into library code (`compare --closing-radius-mm 1e308`:
+// ITK's "Requested region is outside the largest possible region" with a source path; a 300-digit tip printed
+// with %f). An option of another unit has no such cap.
+struct UnitLimit {
+  const char* suffix;
+  double limit;
+  const char* why;
+};
+constexpr UnitLimit kUnitLimits[] = {
+    {"-mm", 1e6, "1e6 mm (a kilometre), past any CT or X-ray geometry"},
+    {"-deg", 1e6, "1e6 degrees"},
+    {"-ml", 1e6, "1e6 ml (a cubic metre)"},
+    {"-ml-per-s", 1e6, "1e6 ml/s"},
+    {"-s", 1e7, "1e7 s (four months; cement sets in minutes)"},
+    {"-hu", 1e6, "1e6 HU (CT values lie within -1024 .. 30000)"},
+    {"-voxels", 1e3, "1000 voxels (wider than any CT's slab)"},
+    {"-mpa", 1e6, "1e6 MPa"},
+    {"-pa-s", 1e9, "1e9 Pa.s (a setting cement dough is 1e4-1e5 Pa.s)"}, // not seconds
+    {"-m-per-s", 1e6, "1e6 m/s"},                                          // not seconds
+};
+
+void requireUnitRanges(CLI::App& sub) {
+  for (CLI::Option* option : sub.get_options()) {
+    if (option->get_type_name().find("FLOAT") == std::string::npos) continue;
+    const std::string name = option->get_name(false, true);
+    const UnitLimit* unit = nullptr;
+    for (const UnitLimit& u : kUnitLimits) // the longest matching suffix: -ml-per-s before -s
+      if (name.size() > std::strlen(u.suffix) && name.compare(name.size() - std::strlen(u.suffix), std::string::npos, u.suffix) == 0 &&
+          (!unit || std::strlen(u.suffix) > std::strlen(unit->suffix)))
+        unit = &u;
+    if (!unit) continue;
+    option->check(CLI::Validator(
+        [unit](std::string& value) -> std::string {
+          char* end = nullptr;
+          const double x = std::strtod(value.c_str(), &end);
+          if (end != value.c_str() && std::isfinite(x) && std::fabs(x) > unit->limit)
+            return "'" + value.substr(0, 40) + "' is beyond " + unit->why + "; check the value and its unit";
+          return {};
+        },
+        "", "in range"));
   }
 }
 
@@ -151,6 +196,7 @@ std::map<CLI::App*, cementsph::app::CommandRunner> addSubcommands(CLI::App& app,
     capThreadsOption(*sub);
     refuseEmptyValues(*sub);
     requireFiniteNumbers(*sub);
+    requireUnitRanges(*sub);
     if (!sub->get_option_no_throw("--quiet"))
       sub->add_flag("--quiet", *quiet, "Print nothing but errors (the files are written as usual)");
   }

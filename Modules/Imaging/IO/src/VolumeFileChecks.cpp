@@ -335,7 +335,8 @@ std::vector<std::string> patternFiles(const std::string& path, const std::string
 }
 
 // The non-empty lines after the line that holds `key` (a LIST of data files follows its key).
-std::vector<std::string> linesAfterKey(const std::string& path, const std::string& key, char separator) {
+std::vector<std::string> linesAfterKey(const std::string& path, const std::string& key, char separator,
+                                       std::size_t* blankLinesAtEnd = nullptr) {
   std::ifstream in(path, std::ios::binary);
   std::vector<std::string> out;
   std::string line;
@@ -351,7 +352,12 @@ std::vector<std::string> linesAfterKey(const std::string& path, const std::strin
     const auto at = line.find(separator);
     if (at != std::string::npos && lower(trim(line.substr(0, at))) == key) listing = true;
   }
-  while (!out.empty() && out.back().empty()) out.pop_back(); // a final newline is no file
+  std::size_t blank = 0;
+  while (!out.empty() && out.back().empty()) { // a final newline is no file
+    out.pop_back();
+    ++blank;
+  }
+  if (blankLinesAtEnd) *blankLinesAtEnd = blank;
   return out;
 }
 
@@ -525,6 +531,20 @@ void checkMetaPayload(const std::string& path, std::uintmax_t imageBytes) {
   }
   const bool local = lower(dataFile) == "local";
   const std::string data = local ? path : besideHeader(path, dataFile);
+  // Compressed: MetaIO inflates CompressedDataSize bytes and leaves the voxels those do not reach as they were,
+  // without a word (a size 100 bytes short, or none, read a different volume). It must be the compressed
+  // bytes exactly: the rest of the file after the header, or the whole data file.
+  if (compressed) {
+    const std::uintmax_t size = fileSize(data), start = local ? h.dataOffset : 0;
+    const std::uintmax_t stored = size > start ? size - start : 0;
+    const auto given = h.fields.count("compresseddatasize") ? toInteger(trim(h.fields.at("compresseddatasize")))
+                                                            : std::nullopt;
+    if (!given || *given < 0 || std::uintmax_t(*given) != stored)
+      refuse(path, "CompressedDataSize = " +
+                       (h.fields.count("compresseddatasize") ? shownValue(h.fields.at("compresseddatasize")) : "(missing)") +
+                       " must be the " + std::to_string(stored) + " compressed bytes the data holds (the reader "
+                       "inflates only that many and leaves the other voxels unset); export the volume again");
+  }
   if (!local) {
     requireDataFile(path, data, compressed ? 0 : offset, compressed ? Packing::Zlib : Packing::Raw, imageBytes);
     return;
@@ -533,6 +553,11 @@ void checkMetaPayload(const std::string& path, std::uintmax_t imageBytes) {
   else {
     const auto size = fileSize(data);
     requireBytes(path, size > h.dataOffset ? size - h.dataOffset : 0, imageBytes);
+    // HeaderSize > 0 moves the start of the voxels: the file must hold them after it (999999999 read zeros).
+    if (offset > 0 && !(size >= offset && size - offset >= imageBytes))
+      refuse(path, "HeaderSize = " + std::to_string(offset) + " puts the voxels past the end of the file (" +
+                       std::to_string(size) + " bytes, " + std::to_string(imageBytes) + " of voxels); fix HeaderSize "
+                       "or export the volume again");
   }
 }
 
@@ -599,11 +624,16 @@ std::vector<std::string> nrrdDataFiles(const std::string& path, const TextHeader
   for (std::size_t a = std::size_t(std::max(0LL, subdim)); a < sizes.size(); ++a) needed *= sizes[a];
   std::vector<std::string> names;
   if (list) {
-    names = linesAfterKey(path, at->first, ':');
-    if (static_cast<long long>(names.size()) < needed)
+    std::size_t blankLines = 0;
+    names = linesAfterKey(path, at->first, ':', &blankLines);
+    // Exactly one name per piece: teem refuses a longer list ("expected 16 filenames but got 17"), with the
+    // empty line a header's blank line ends with counted as a name.
+    if (static_cast<long long>(names.size()) != needed)
       refuse(path, "data file: LIST names " + std::to_string(names.size()) + " files, but sizes need " +
-                       std::to_string(needed) + "; list one file per slice");
-    names.resize(std::size_t(needed));
+                       std::to_string(needed) + "; list exactly one file per slice");
+    if (blankLines > 0)
+      refuse(path, "data file: LIST is followed by a blank line, which this build's NRRD reader takes for one more "
+                   "file name; end the header with the last file name");
   } else {
     names = patternFiles(path, "data file", dataFile, w, needed, true);
   }

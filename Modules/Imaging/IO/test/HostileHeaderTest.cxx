@@ -284,6 +284,12 @@ TEST(HostileNrrd, DataFileListsAndPatterns) {
   expectValues(dir / "pattern.nhdr", 0.5);
   writeFile(dir / "short.nhdr", nrrdHeader(kDirections, "raw", "LIST") + "s01.raw\ns02.raw\n");
   expectRefused(dir / "short.nhdr", "LIST");
+  // One name too many, and the full list followed by a blank line (teem counts it as a sixth name and fails
+  // with its own words): each refused naming the LIST.
+  writeFile(dir / "long.nhdr", nrrdHeader(kDirections, "raw", "LIST") + "s01.raw\ns02.raw\ns03.raw\ns04.raw\ns05.raw\ns01.raw\n");
+  expectRefused(dir / "long.nhdr", "LIST names 6 files");
+  writeFile(dir / "blank.nhdr", nrrdHeader(kDirections, "raw", "LIST") + "s01.raw\ns02.raw\ns03.raw\ns04.raw\ns05.raw\n\n");
+  expectRefused(dir / "blank.nhdr", "blank line");
   for (const char* pattern : {"s%02d.raw 1 5 0", "s%s.raw 1 5 1", "s%02d.raw 1 3 1", "s%n.raw 1 5 1", "s%02d.raw 5 1 1"}) {
     writeFile(dir / "bad.nhdr", nrrdHeader(kDirections, "raw", pattern) + "\n");
     expectRefused(dir / "bad.nhdr", "data file");
@@ -548,6 +554,28 @@ TEST(HostileMetaImage, ObjectTypeTextVoxelsAndByteOrderThatMetaIoGuessesAreRefus
   expectRefused(metaCase(dir, "order.mhd", "ElementByteOrderMSB = Maybe", "all.raw"), "ElementByteOrderMSB");
   expectRefused(metaCase(dir, "border.mhd", "BinaryDataByteOrderMSB = 2", "all.raw"), "BinaryDataByteOrderMSB");
   expectValues(metaCase(dir, "binary.mhd", "BinaryData = True", "all.raw"), 0.5);
+  // Compressed voxels: MetaIO inflates CompressedDataSize bytes only and leaves the rest of the volume unset,
+  // so the size must be the compressed bytes exactly (given right, the file reads back the values).
+  const std::string raw = bytesOf(voxels());
+  std::string packed(compressBound(uLong(raw.size())), '\0');
+  uLongf packedSize = uLongf(packed.size());
+  ASSERT_EQ(compress2(reinterpret_cast<Bytef*>(packed.data()), &packedSize, reinterpret_cast<const Bytef*>(raw.data()),
+                      uLong(raw.size()), 6),
+            Z_OK);
+  packed.resize(packedSize);
+  auto compressedMha = [&](const std::string& name, const std::string& sizeLine) {
+    std::string h = metaHeader("CompressedData = True", "LOCAL");
+    h.insert(h.find("ElementDataFile"), sizeLine);
+    writeFile(dir / name, h + packed);
+    return dir / name;
+  };
+  expectValues(compressedMha("right.mha", "CompressedDataSize = " + std::to_string(packed.size()) + "\n"), 0.5);
+  expectRefused(compressedMha("short.mha", "CompressedDataSize = " + std::to_string(packed.size() - 10) + "\n"),
+                "CompressedDataSize");
+  expectRefused(compressedMha("none.mha", ""), "CompressedDataSize");
+  // HeaderSize past the end of the file (MetaIO read zeros).
+  writeFile(dir / "skip.mha", metaHeader("HeaderSize = 999999999", "LOCAL") + raw);
+  expectRefused(dir / "skip.mha", "HeaderSize");
 }
 
 TEST(HostileNrrd, ByteAndLineSkipsThatAreNoPositionAreRefused) {

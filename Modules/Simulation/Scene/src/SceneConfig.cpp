@@ -45,6 +45,9 @@ constexpr double kMaxSnapshots = 10000.0;
 // PMMA cements are injected at 10-3000 Pa.s and set as a dough of 1e4-1e5 Pa.s (Krebs et al. 2005, Baroud et al.
 // 2006): a viscosity above 1e7 Pa.s is a typo, and the run's dimensionless numbers would overflow long before 1e308.
 constexpr double kMaxViscosityPaS = 1e7;
+// Below water's 1e-3 Pa.s no liquid exists, let alone a cement (10 Pa.s and up): 1e-300 Pa.s left the SPH
+// time step unbounded ("no finite time step"), an error that named no key.
+constexpr double kMinViscosityPaS = 1e-4;
 // Less than a cubic millimetre is below one voxel of any CT the program reads: no spreading to predict.
 constexpr double kMinVolumeMl = 1e-3;
 // Upper ends: a vertebral body holds about 30-50 ml and a kit's syringes 10-20 ml, so a litre is past any
@@ -390,6 +393,12 @@ void SceneConfig::validate() const {
     fail("flow_rate_ml_per_s", what.str());
   }
   requirePositive(viscosityPaS, "viscosity_pa_s");
+  if (!(viscosityPaS >= kMinViscosityPaS)) {
+    std::ostringstream what;
+    what << "is too small: " << viscosityPaS << " Pa.s is below " << kMinViscosityPaS
+         << " Pa.s, thinner than water (1e-3 Pa.s; cements are 10 Pa.s and up): give the viscosity in Pa.s";
+    fail("viscosity_pa_s", what.str());
+  }
   if (!(viscosityPaS <= kMaxViscosityPaS)) {
     std::ostringstream what;
     what << "is too large: " << viscosityPaS << " Pa.s is above " << kMaxViscosityPaS
@@ -410,8 +419,9 @@ void SceneConfig::validate() const {
   requirePositive(snapshotIntervalS, "snapshot_interval_s");
   if (!(injectionDurationS() / snapshotIntervalS <= kMaxSnapshots)) {
     std::ostringstream what;
-    what << "is too small: " << snapshotIntervalS << " s over a " << injectionDurationS() << " s injection is more than "
-         << kMaxSnapshots << " snapshots: use at least " << injectionDurationS() / kMaxSnapshots << " s";
+    what << "is too small: " << snapshotIntervalS << " s over a " << injectionDurationS()
+         << " s injection (volume_ml / flow_rate_ml_per_s) is more than " << kMaxSnapshots
+         << " snapshots: use at least " << injectionDurationS() / kMaxSnapshots << " s";
     fail("snapshot_interval_s", what.str());
   }
   requirePositive(solidMassFactor, "solid_mass_factor");
