@@ -98,6 +98,15 @@ TEST(HostileOptions, EmptySubnormalAndModeClashingValuesAreRefusedNamingTheOptio
       // 1e-320 is subnormal: it turned into infinities that blamed other options.
       {with(drr, {"--sid-mm", "1e-320"}), "--sid-mm"},
       {{"phantom", "--out", out, "--cell-size-mm", "1e-320"}, "--cell-size-mm"},
+      // Past the ceiling of the option's unit (1e6 mm): 1e308 reached ITK, whose message was the error line.
+      {{"compare", "--pre", volume, "--post", volume, "--injection-point-mm", "1,1,1", "--out", out,
+        "--closing-radius-mm", "1e308"},
+       "--closing-radius-mm"},
+      {{"compare", "--pre", volume, "--post", volume, "--injection-point-mm", "1,1,1e308", "--out", out},
+       "--injection-point-mm"},
+      {with(drr, {"--gantry-angle-deg", "1e300"}), "--gantry-angle-deg"},
+      // A cone-beam source 1 mm from the isocentre lies inside the 30 mm block: it drew a DRR.
+      {with(drr, {"--sad-mm", "1"}), "--sad-mm"},
       // The geometry's complaint names the option that set it.
       {with(drr, {"--sid-mm", "5"}), "--sid-mm"},
       {with(drr, {"--sad-mm", "-0"}), "--sad-mm"},

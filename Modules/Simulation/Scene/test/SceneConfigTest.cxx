@@ -545,7 +545,9 @@ TEST(SceneConfig, DuplicateKeysAndVolumesOrRatesPastAnyInjectionAreRefusedNaming
            {"{" + tip + R"(, "cement": "x", "tip_mm": [1, 2, 3]})", "tip_mm"},
            {"{" + tip + R"(, "volume_ml": 1e308})", "volume_ml"},
            {"{" + tip + R"(, "volume_ml": 1000.5})", "volume_ml"},
-           {"{" + tip + R"(, "flow_rate_ml_per_s": 1e308})", "flow_rate_ml_per_s"}}) {
+           {"{" + tip + R"(, "flow_rate_ml_per_s": 1e308})", "flow_rate_ml_per_s"},
+           // Thinner than water: the time step had no bound and the error named no key.
+           {"{" + tip + R"(, "viscosity_pa_s": 1e-300})", "viscosity_pa_s"}}) {
     const std::string e = errorOf(text);
     EXPECT_EQ(e.rfind(path + ": ", 0), 0u) << text << ": " << e;
     EXPECT_NE(e.find("'" + key + "'"), std::string::npos) << text << ": " << e;
@@ -555,7 +557,8 @@ TEST(SceneConfig, DuplicateKeysAndVolumesOrRatesPastAnyInjectionAreRefusedNaming
     }
   }
   // The same key in two different objects is not a duplicate, and the limits themselves are accepted.
-  EXPECT_EQ(errorOf("{" + tip + R"(, "volume_ml": 1000, "flow_rate_ml_per_s": 1000})"), "no error");
+  EXPECT_EQ(errorOf("{" + tip + R"(, "volume_ml": 1000, "flow_rate_ml_per_s": 1000, "viscosity_pa_s": 1e-4})"),
+            "no error");
   EXPECT_EQ(errorOf("{" + tip + R"(, "label_table": {"1": "bone"}, "labels_path": "x.nrrd"})").find("appears twice"),
             std::string::npos);
 }
