@@ -6,15 +6,11 @@
 // (what its metrics.json is written from), so that a caller (demo) need not read back the file.
 #pragma once
 
-// ITK's headers (the comparison's) before the injection's: ITK carries its own copy of Eigen, which must come first.
-#include "cementsph/study/CementComparison.h"
-
 #include "DrrOptions.h"
 
 #include "cementsph/drr/XraySequence.h"
 #include "cementsph/drr/XraySequenceFiles.h"
 #include "cementsph/imaging/CementSegmentation.h"
-#include "cementsph/scene/InjectionRunner.h"
 #include "cementsph/scene/SceneSettings.h"
 #include "cementsph/surfacemetrics/Isosurface.h"
 
@@ -23,6 +19,16 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+// The results the callers fill in, declared only: a command that runs none of them need not compile the
+// injection's or the comparison's headers (InjectionRunner.h, CementComparison.h).
+namespace cementsph::scene {
+struct InjectionResult;
+using InjectionRunResult = InjectionResult;
+} // namespace cementsph::scene
+namespace cementsph::study {
+struct CementComparison;
+} // namespace cementsph::study
 
 namespace cementsph::app {
 

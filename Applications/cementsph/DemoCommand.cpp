@@ -10,12 +10,14 @@
 // writes it from their typed results). The phantom's post scan was
 // itself made by the model (cementsph phantom), so the comparison checks the pipeline; it is not a validation
 // of the model, and metrics.json and the last line say so (post_scan_made_by).
+// First: DemoReport.h brings ITK's headers, whose own copy of Eigen must come before the system Eigen others include.
+#include "cementsph/study/DemoReport.h"
+
 #include "CommandRegistry.h"
 #include "CommandRequests.h"
 
 #include "cementsph/phantom/PhantomFiles.h"
 #include "cementsph/scene/SceneSettings.h"
-#include "cementsph/study/DemoReport.h"
 
 #include <array>
 #include <chrono>
