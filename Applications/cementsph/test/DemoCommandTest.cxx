@@ -48,6 +48,19 @@ TEST(DemoCommand, PipelineCheckOnTheBundledPhantomRecoversItsVolumeAndAgrees) {
   EXPECT_GE(demo.at("xray").at("final_frame_dice").get<double>(), 0.8);
   EXPECT_GT(demo.at("xray").at("final_frame_iou").get<double>(), 0.0);
   EXPECT_EQ(demo.at("compare").at("dice").get<double>(), m.at("dice").get<double>());
+  // Every headline figure is its step's own, as that step's metrics.json holds it (the demo's report is written
+  // from the steps' typed results, each step's file by the step itself).
+  std::ifstream injectIn(out / "inject" / "metrics.json"), xrayIn(out / "xray" / "metrics.json");
+  const auto injectMetrics = nlohmann::json::parse(injectIn), xrayMetrics = nlohmann::json::parse(xrayIn);
+  for (const auto& [key, value] : demo.at("inject").items()) EXPECT_EQ(value, injectMetrics.at(key)) << key;
+  for (const auto& [key, value] : demo.at("compare").items()) EXPECT_EQ(value, m.at(key)) << key;
+  for (const char* key : {"final_time_s", "final_projected_area_mm2", "final_reference_projected_area_mm2"})
+    EXPECT_EQ(demo.at("xray").at(key), xrayMetrics.at(key)) << key;
+  EXPECT_EQ(demo.at("xray").at("final_frame_dice"), xrayMetrics.at("final_frame").at("dice"));
+  EXPECT_EQ(demo.at("xray").at("final_frame_iou"), xrayMetrics.at("final_frame").at("iou"));
+  EXPECT_EQ(demo.at("inject").size(), 6u);
+  EXPECT_EQ(demo.at("compare").size(), 5u);
+  EXPECT_EQ(demo.at("xray").size(), 5u);
   // The post scan is the model's own (cementsph phantom): the demo must not present the comparison as a validation.
   EXPECT_EQ(demo.at("post_scan_made_by").get<std::string>(), "the model itself (pipeline check, not a validation)");
   std::ifstream inj(out / "inject" / "metrics.json");
@@ -75,6 +88,13 @@ TEST(DemoCommand, VertebraReadsTheDicomSeriesAndReportsTheLeak) {
   EXPECT_GT(m.at("leakage_volume_ml").get<double>(), 0.0);
   EXPECT_FALSE(m.at("leakage_sites").empty());
   EXPECT_NEAR(m.at("cement_volume_ml").get<double>(), 4.0, 0.04);
+  // The report's figures are the injection's own (inject/metrics.json), but the whole demo's wall time.
+  std::ifstream injectIn(out / "inject" / "metrics.json");
+  const auto inject = nlohmann::json::parse(injectIn);
+  for (const auto& [key, value] : m.items())
+    if (key != "wall_time_s" && key != "provenance") EXPECT_EQ(value, inject.at(key)) << key;
+  EXPECT_GE(m.at("wall_time_s").get<double>(), inject.at("wall_time_s").get<double>());
+  EXPECT_EQ(m.size(), 14u); // 12 figures, the wall time, the provenance
   EXPECT_TRUE(fs::exists(out / "inject" / "injection_pressure.png"));
   EXPECT_TRUE(fs::exists(out / "inject" / "cement_slices.png"));  // the leak in red (CementSlices test: colours)
   EXPECT_TRUE(fs::exists(out / "inject" / "cement_labels.nrrd"));
