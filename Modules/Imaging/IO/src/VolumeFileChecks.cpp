@@ -400,10 +400,10 @@ std::vector<std::string> metaDataFiles(const std::string& path, const TextHeader
     long long needed = 1;
     for (long long a = fileDim; a < 3; ++a) needed *= size[std::size_t(a)];
     names = linesAfterKey(path, "elementdatafile", '=');
-    if (static_cast<long long>(names.size()) < needed)
+    // Exactly one per slice: with more, which of them hold the volume is a guess (MetaIO read the first ones).
+    if (static_cast<long long>(names.size()) != needed)
       refuse(path, "ElementDataFile = LIST names " + std::to_string(names.size()) + " data files, but DimSize needs " +
-                       std::to_string(needed) + "; list one file per slice");
-    names.resize(std::size_t(needed));
+                       std::to_string(needed) + "; list exactly one file per slice");
     for (std::size_t k = 0; k < names.size(); ++k)
       if (names[k].empty() || names[k].size() > 1000) // MetaIO reads names into a 1024-byte buffer
         refuse(path, "ElementDataFile = LIST: line " + std::to_string(k + 1) + " after it is not a file name");

@@ -155,6 +155,9 @@ TEST(HostileMetaImage, ListWithTooFewFilesIsRefused) {
   expectRefused(metaCase(dir, "l.mhd", "", "LIST", "s01.raw\ns02.raw\ns03.raw\n"), "LIST");
   expectRefused(metaCase(dir, "l.mhd", "", "LIST", ""), "LIST");
   expectRefused(metaCase(dir, "l.mhd", "", "LIST", "s01.raw\ns02.raw\nmissing.raw\ns04.raw\ns05.raw\n"), "missing.raw");
+  // One file too many (issue 21, H5 corpus: MetaIO read the first five, silently).
+  expectRefused(metaCase(dir, "l.mhd", "", "LIST", "s01.raw\ns02.raw\ns03.raw\ns04.raw\ns05.raw\ns01.raw\n"),
+                "LIST names 6");
 }
 
 TEST(HostileMetaImage, DimensionsAndSpacingsOutsideTheirRangeAreRefused) {
