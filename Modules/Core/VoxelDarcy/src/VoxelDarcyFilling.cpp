@@ -469,6 +469,9 @@ VoxelDarcyFilling::VoxelState VoxelDarcyFilling::voxelState(std::size_t c) const
 void VoxelDarcyFilling::markFilled(std::size_t c) {
   const VoxelBricks::Cell cell = touch(c);
   cell.set(VoxelBricks::kFilledFlag, 1);
+  // A voxel barred on the front and then filled by another's excess: barred no longer (the flag is the
+  // front's; left set, the assembly would leave out its faces from one side only).
+  cell.set(VoxelBricks::kBarredFlag, 0);
   cell->fill = 1.0;
   cell->pressure = settings_.frontPressurePa; // warm start: the front's pressure, where it was
   if (uniformViscosity_ && !shearLaw_) cell->viscosity = viscosityValue_;
@@ -630,13 +633,22 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
     int* inner = A.column.data();
     double* value = A.value.data();
     int nnz = 0;
+    // Each filled voxel's mobility once (a division), and each face between two filled voxels' transmissibility
+    // once: the lower row computes it and keeps it (upperTransmissibility_, per row and axis), the upper row
+    // (assembled later: rows go in voxel order) reads it back, and so do the face fluxes.
+    rowMobility_.resize(std::size_t(unknowns));
+    upperTransmissibility_.resize(3 * std::size_t(unknowns));
+    double* rowMobility = rowMobility_.data();
+    double* upperT = upperTransmissibility_.data();
+    for (int row = 0; row < unknowns; ++row)
+      rowMobility[row] = mobility(filled_[std::size_t(row)], filledCell_[std::size_t(row)]);
     for (int row = 0; row < unknowns; ++row) {
       const std::size_t c = filled_[std::size_t(row)];
       A.rowStart[std::size_t(row)] = nnz;
       const VoxelBricks::Cell own = filledCell_[std::size_t(row)];
       x[row] = own->pressure;
       const auto& v = filledIjk_[std::size_t(row)];
-      const double lc = mobility(c, own);
+      const double lc = rowMobility[row];
       double diagonal = 0;
       int diagonalAt = -1;
       // Neighbours in increasing voxel order: -z, -y, -x, (self), +x, +y, +z.
@@ -657,15 +669,23 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
         const VoxelBricks::Cell cell = bricks_.neighbour(own, v, axis, sign);
         if (cell.has(VoxelBricks::kBarredFlag)) continue;
         const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
-        const double lm = mobility(m, cell);
         if (cell.has(VoxelBricks::kFilledFlag)) {
-          const double t = area * 2.0 * lc * lm / ((lc + lm) * dist); // harmonic mean mobility
+          const int other = cell->unknown;
+          double t;
+          if (sign < 0) {
+            t = upperT[3 * other + axis]; // the lower row's
+          } else {
+            const double lm = rowMobility[other];
+            t = area * 2.0 * lc * lm / ((lc + lm) * dist); // harmonic mean mobility
+            upperT[3 * row + axis] = t;
+          }
           diagonal += t;
           inner[nnz] = cell->unknown;
           value[nnz++] = -t;
         } else {
           // Ghost fluid: p_front at f of the way across the front voxel; half a voxel of this one's
           // mobility in series with f of the front voxel's.
+          const double lm = mobility(m, cell);
           const double resistance = 0.5 * dist / lc + cell->fill * dist / lm;
           const double t = area / resistance;
           diagonal += t;
@@ -732,8 +752,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
         const std::size_t m = c + std::size_t(stride[a]);
         const VoxelBricks::Cell cell = bricks_.neighbour(own, v, a, 1);
         if (state(m, cell) != kFilled) continue;
-        const double lc = mobility(c, own), lm = mobility(m, cell);
-        const double t = faceArea_[std::size_t(a)] * 2.0 * lc * lm / ((lc + lm) * faceDistance_[std::size_t(a)]);
+        const double t = upperTransmissibility_[3 * row + std::size_t(a)];
         own->faceFlux[a] =
             float(t * (own->pressure - cell->pressure));
       }

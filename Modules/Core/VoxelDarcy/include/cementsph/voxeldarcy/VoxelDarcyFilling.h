@@ -407,6 +407,9 @@ private:
   double viscosityValue_ = 1.0;
   PressureSystem system_;
   PressureSolver solver_;
+  // The assembly's per-row mobility and, per row and axis, the transmissibility of the face to the filled
+  // voxel above (+x, +y, +z; written only where that voxel is filled), kept for the face fluxes.
+  std::vector<double> rowMobility_, upperTransmissibility_;
 };
 
 } // namespace cementsph::voxeldarcy
