@@ -7,7 +7,7 @@
 #      folder, never the tree), two at a time;
 #   2. the same clang build of the suites of the plain C++ modules (Rheology, SPH, VoxelDarcy, Scene: the unit
 #      ones and the voxel filling's validation suite), which need neither VTK nor ITK;
-#   3. (SANITIZE_UNIT_LABEL=1; off by default and in CI, see below) every other suite of the whole tree's `unit` label (the VTK and ITK
+#   3. (SANITIZE_UNIT_LABEL=1, as .ci/run sets it; off by default) every other suite of the whole tree's `unit` label (the VTK and ITK
 #      ones, and the command suites with the cementsph program they run) as a Debug -O1 -g build of the CMake
 #      tree with GCC, in $SANITIZE_CMAKE_DIR (GCC: Debian's ITK 5.2 headers refuse clang,
 #      itk_compiler_detection.h), run by ctest -L unit, JOBS at a time. Only those suites' targets are built; the
@@ -23,15 +23,10 @@
 # suppressions). Estimated warm (same clone path, nothing changed): about 5 min of linking for step 3's 24 suites
 # and the program, 2 min of tests, so .ci/run about 26-27 min (build.sh about 11, ctest 5.3, steps 1-2 about 3,
 # step 3 about 7). Cold it does not fit: CI_DEADLINE stops it (below).
-# Why step 3 is not in CI yet (decided 2026-12-03, 16:40 UTC): about 41 test sources and the program's sources
-# carry absolute paths in their compile lines (CEMENTSPH_TEST_DATA_DIR, CEMENTSPH_BINARY_DIR, CEMENTSPH_EXECUTABLE,
-# CEMENTSPH_DATA_DIR), so in CI's clone at its own path they miss ccache and compile cold under ASan: tens of
-# minutes on 2 cores, over the 30 min aim and, with a cold Release build beside it, near the 90 min limit. The fix
-# is to give those paths to the suites from one small compiled file (the macros calling into it), so that only it
-# misses; then step 3 can be switched on in .ci/run. Until then it runs by hand:
-# SANITIZE_UNIT_LABEL=1 bash scripts/ci-sanitizers.sh (last run 2026-12-03: 145 tests, 141 passed; SceneKeysTest's 4
-# failed with a heap-buffer-overflow that was one object compiled against a brick layout tried and reverted in the
-# shared tree, and passed, 6 of 6, once that object was rebuilt).
+# Step 3 in CI (since 2026-12-03 18:10 UTC): the suites' paths come from one compiled file (TestPaths.cpp), so in
+# CI's clone only it and DemoCommand.cpp miss ccache. Measured in a fresh clone (/tmp/asan-warm) at load 5-7 under
+# nice 10, with the libraries cached and the test objects new (the TestPaths change): step 3's build 1717 s, its 146
+# tests 160 s; steps 1-2 97 s. Run by hand: SANITIZE_UNIT_LABEL=1 bash scripts/ci-sanitizers.sh.
 # CI_DEADLINE (seconds since the epoch, set by .ci/run to 85 min after CI starts, short of its 90 min hard limit):
 # if step 3's build would run past it (a cold ccache), the stage stops with a line saying so, and fails; what was
 # compiled stays cached, so the next run continues from there.
