@@ -8,7 +8,9 @@
 #include "CommandRegistry.h"
 #include "DrrOptions.h"
 
+#include "cementsph/drr/DRRFiles.h"
 #include "cementsph/drr/ProjectVolume.h"
+#include "cementsph/drr/VolumeView.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
 
@@ -60,7 +62,7 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
         cementsph::app::geometryForVolume(a->drr, geometryOf(ct).physicalBounds(), false);
 
     auto t = std::chrono::steady_clock::now();
-    vtkSmartPointer<vtkImageData> hu = cementsph::app::viewAsVtk(ct.GetPointer());
+    vtkSmartPointer<vtkImageData> hu = cementsph::drr::viewAsVtk(ct.GetPointer());
     const double bridgeSeconds = seconds(t);
     t = std::chrono::steady_clock::now();
     const vtkSmartPointer<vtkImageData> image = cementsph::drr::projectVolume(hu, geometry, a->drr.threads);
@@ -68,7 +70,7 @@ cementsph::app::CommandRunner setupDrr(CLI::App& sub) {
 
     // Write: directory, numbers, picture; a failed write leaves no half output.
     t = std::chrono::steady_clock::now();
-    cementsph::app::writeDrrFiles(image, a->out);
+    cementsph::drr::writeDrrFiles(image, a->out);
     const std::string nrrd = (fs::path(a->out) / "drr.nrrd").string(), png = (fs::path(a->out) / "drr.png").string();
 
     double range[2];

@@ -1,20 +1,5 @@
 #include "DrrOptions.h"
 
-#include "cementsph/imaging/AtomicFile.h"
-#include "cementsph/imaging/ItkVtkBridge.h"
-#include "cementsph/imaging/VolumeIO.h"
-
-#include <vtkDataArray.h>
-#include <vtkFloatArray.h>
-#include <vtkImageData.h>
-#include <vtkImageShiftScale.h>
-#include <vtkNew.h>
-#include <vtkPNGWriter.h>
-#include <vtkPointData.h>
-
-#include <algorithm>
-#include <cstdio>
-#include <filesystem>
 #include <stdexcept>
 
 namespace cementsph::app {
@@ -101,94 +86,6 @@ drr::DRRGeometry geometryForVolume(const DrrGeometryArgs& a, const std::array<do
   }
   if (const std::string problem = g.validate(); !problem.empty()) throw std::runtime_error(problem);
   return g;
-}
-
-vtkSmartPointer<vtkImageData> viewAsVtk(const imaging::ImageType* volume) {
-  if (volume == nullptr) throw std::runtime_error("viewAsVtk: no volume");
-  const auto region = volume->GetBufferedRegion();
-  const auto size = region.GetSize();
-  auto view = vtkSmartPointer<vtkImageData>::New();
-  view->SetDimensions(static_cast<int>(size[0]), static_cast<int>(size[1]), static_cast<int>(size[2]));
-  // The buffered region may not start at index 0: its first voxel's position is the VTK origin.
-  imaging::PointType start;
-  volume->TransformIndexToPhysicalPoint(region.GetIndex(), start);
-  double direction[9];
-  for (unsigned i = 0; i < 3; ++i)
-    for (unsigned j = 0; j < 3; ++j) direction[3 * i + j] = volume->GetDirection()[i][j];
-  view->SetOrigin(start[0], start[1], start[2]);
-  view->SetSpacing(volume->GetSpacing()[0], volume->GetSpacing()[1], volume->GetSpacing()[2]);
-  view->SetDirectionMatrix(direction);
-  auto voxels = vtkSmartPointer<vtkFloatArray>::New();
-  // save = 1: VTK never frees (or writes) ITK's buffer; the const_cast is safe because the DRR only reads.
-  voxels->SetArray(const_cast<float*>(volume->GetBufferPointer()),
-                   static_cast<vtkIdType>(region.GetNumberOfPixels()), 1);
-  view->GetPointData()->SetScalars(voxels);
-  return view;
-}
-
-void writeDrrPng(vtkImageData* drr, const std::string& path, double windowMax) {
-  double range[2];
-  drr->GetPointData()->GetScalars()->GetRange(range, 0);
-  const double top = windowMax > 0.0 ? windowMax : range[1];
-  // One convention in every X-ray picture the program writes (drr.png, the sequences' frames, xray_frames.png
-  // of XrayFramesPicture.h): dense matter dark, as a C-arm monitor shows it: grey = 255 (1 - value / top),
-  // clamped. All air (top 0) is white.
-  const double window = top > 0.0 ? top : 1.0;
-  vtkNew<vtkImageShiftScale> toBytes;
-  toBytes->SetInputData(drr);
-  toBytes->SetShift(-window);
-  toBytes->SetScale(-255.0 / window);
-  toBytes->SetOutputScalarTypeToUnsignedChar();
-  toBytes->ClampOverflowOn();
-  imaging::writeAtomically(path, [&](const std::string& tmp) {
-    vtkNew<vtkPNGWriter> writer;
-    writer->SetInputConnection(toBytes->GetOutputPort());
-    writer->SetFileName(tmp.c_str());
-    writer->Write();
-    if (writer->GetErrorCode() != 0) throw std::runtime_error("PNG writer failed");
-  });
-}
-
-void writeDrrFiles(vtkImageData* drr, const std::string& outDir) {
-  namespace fs = std::filesystem;
-  const fs::path out(outDir);
-  std::error_code ec;
-  const bool madeDirectory = !fs::exists(out, ec);
-  fs::create_directories(out, ec);
-  if (ec) throw std::runtime_error(outDir + ": cannot create output directory: " + ec.message());
-  const std::string nrrd = (out / "drr.nrrd").string(), png = (out / "drr.png").string();
-  bool wroteNrrd = false;
-  try {
-    imaging::writeVolume(imaging::imageFromVtk(drr), nrrd, /*compress=*/false);
-    wroteNrrd = true;
-    writeDrrPng(drr, png);
-  } catch (...) {
-    if (wroteNrrd) fs::remove(nrrd, ec);
-    if (madeDirectory) fs::remove(out, ec); // only if empty
-    throw;
-  }
-}
-
-double drrWindow(const drr::XraySequence& sequence) {
-  double top = 0.0;
-  for (const auto& f : sequence.frames()) {
-    double range[2];
-    f.drr->GetPointData()->GetScalars()->GetRange(range, 0);
-    top = std::max(top, range[1]);
-  }
-  return top;
-}
-
-void writeDrrFrames(const drr::XraySequence& sequence, const char* prefix, const std::string& dir) {
-  const double window = drrWindow(sequence);
-  for (std::size_t k = 0; k < sequence.frames().size(); ++k) {
-    char name[64];
-    std::snprintf(name, sizeof name, "%s_drr_%04zu", prefix, k);
-    const auto& frame = sequence.frames()[k];
-    const std::filesystem::path base = std::filesystem::path(dir) / name;
-    imaging::writeVolume(imaging::imageFromVtk(frame.drr), base.string() + ".nrrd");
-    writeDrrPng(frame.drr, base.string() + ".png", window);
-  }
 }
 
 } // namespace cementsph::app

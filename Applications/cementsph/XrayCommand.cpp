@@ -20,6 +20,7 @@
 #include "DrrOptions.h"
 #include "OutputFiles.h"
 
+#include "cementsph/drr/DRRFiles.h"
 #include "cementsph/drr/XraySequence.h"
 #include "cementsph/drr/XraySequenceComparison.h"
 #include "cementsph/drr/XraySequenceFiles.h"
@@ -152,9 +153,9 @@ void computeSequences(const XrayRequest& a, XrayRun& run) {
 void drawFrames(const XrayRun& run, int maxColumns, const std::string& referenceLabel, const fs::path& png) {
   const drr::XraySequence& sequence = *run.sequence;
   std::vector<std::string> labels;
-  rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, cementsph::app::drrWindow(sequence)};
+  rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, drr::drrWindow(sequence)};
   rendering::XrayFramesRow refRow{referenceLabel, {}, kReferenceRgb,
-                                  run.reference ? cementsph::app::drrWindow(*run.reference) : 0.0};
+                                  run.reference ? drr::drrWindow(*run.reference) : 0.0};
   for (std::size_t k : pictureColumns(sequence.frames().size(), maxColumns)) {
     const auto& f = sequence.frames()[k];
     labels.push_back(timeLabel(f.timeS));
@@ -303,8 +304,8 @@ int runXray(const XrayRequest& a, drr::XrayHeadline* headline) {
   auto t = std::chrono::steady_clock::now();
   imaging::StagedFolder staged(a.out);
   const fs::path dir = staged.path();
-  writeDrrFrames(*run.sequence, "sequence", dir);
-  if (run.reference) writeDrrFrames(*run.reference, "reference", dir);
+  drr::writeDrrFrames(*run.sequence, "sequence", dir);
+  if (run.reference) drr::writeDrrFrames(*run.reference, "reference", dir);
   drr::writeXraySequenceCsv(*run.sequence, record.reference, record.comparison, dir / "sequence.csv");
   record.writeSeconds = secondsSince(t);
 
