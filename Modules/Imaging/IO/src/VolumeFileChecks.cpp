@@ -533,7 +533,9 @@ void checkMetaPayload(const std::string& path, std::uintmax_t imageBytes) {
   const std::string data = local ? path : besideHeader(path, dataFile);
   // Compressed: MetaIO inflates CompressedDataSize bytes and leaves the voxels those do not reach as they were,
   // without a word (a size 100 bytes short, or none, read a different volume). It must be the compressed
-  // bytes exactly: the rest of the file after the header, or the whole data file.
+  // bytes exactly: the rest of the file after the header, or the whole data file (checked to exist first, so
+  // a missing one is named as such).
+  if (!local) requireDataFile(path, data, compressed ? 0 : offset, compressed ? Packing::Zlib : Packing::Raw, imageBytes);
   if (compressed) {
     const std::uintmax_t size = fileSize(data), start = local ? h.dataOffset : 0;
     const std::uintmax_t stored = size > start ? size - start : 0;
@@ -545,10 +547,7 @@ void checkMetaPayload(const std::string& path, std::uintmax_t imageBytes) {
                        " must be the " + std::to_string(stored) + " compressed bytes the data holds (the reader "
                        "inflates only that many and leaves the other voxels unset); export the volume again");
   }
-  if (!local) {
-    requireDataFile(path, data, compressed ? 0 : offset, compressed ? Packing::Zlib : Packing::Raw, imageBytes);
-    return;
-  }
+  if (!local) return;
   if (compressed) requireBytes(path, inflatedBytes(data, h.dataOffset, false), imageBytes);
   else {
     const auto size = fileSize(data);
