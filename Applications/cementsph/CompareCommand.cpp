@@ -11,13 +11,13 @@
 
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
+#include "cementsph/rendering/CementPictureLayout.h"
 #include "cementsph/rendering/RenderBackend.h"
 #include "cementsph/rendering/SliceComparison.h"
 #include "cementsph/rendering/SurfaceComparison.h"
 #include "cementsph/study/CementComparison.h"
 #include "cementsph/study/ScanProvenance.h"
 
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -34,16 +34,10 @@ using cementsph::study::CementComparison;
 void drawSlices(const CementComparison& c, double injectionZMm, const std::string& postLabel, const fs::path& png) {
   cementsph::rendering::SliceComparisonOptions options;
   options.postRowName = postLabel;
-  double lo = 1e300, hi = -1e300;
-  for (vtkPolyData* surface : {c.ct.surface.Get(), c.sim ? c.sim->surface.Get() : nullptr}) {
-    if (surface == nullptr) continue;
-    double b[6];
-    surface->GetBounds(b);
-    lo = std::min(lo, b[4]);
-    hi = std::max(hi, b[5]);
-  }
-  // No cement anywhere: one slice through the injection point still shows where it should be.
-  options.zRangeMm = lo <= hi ? std::make_pair(lo, hi) : std::make_pair(injectionZMm, injectionZMm);
+  // The cement's z range in either scan; no cement anywhere: one slice through the injection point still shows
+  // where it should be.
+  options.zRangeMm =
+      cementsph::rendering::surfacesZRangeMm({c.ct.surface.Get(), c.sim ? c.sim->surface.Get() : nullptr}, injectionZMm);
   auto simulatedVtk = c.simulated ? cementsph::imaging::toVtk(c.simulated.GetPointer()) : nullptr;
   cementsph::rendering::renderSliceComparison(cementsph::imaging::toVtk(c.registered.GetPointer()), simulatedVtk,
                                               png, 5.0, options);

@@ -14,6 +14,7 @@
 #include "OutputFiles.h"
 #include "SceneOverrides.h"
 
+#include "cementsph/rendering/CementPictureLayout.h"
 #include "cementsph/rendering/CementSlices.h"
 #include "cementsph/rendering/CementSurface.h"
 #include "cementsph/rendering/TipPressurePlot.h"
@@ -30,17 +31,15 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <exception>
-#include <cmath>
 #include <filesystem>
 #include <functional>
-#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 
 namespace {
@@ -121,45 +120,20 @@ void drawCementSlices(const InjectRun& run, const scene::SceneConfig& scene, con
   rendering::writeCementSlices(run.simulatedCt, run.cementLabels, marks.centreMm(), png, marks.options());
 }
 
-// The label of the --labels map at the tip (0 outside the map), for --labels without target_vertebra.
-int labelAtTip(vtkImageData* labels, const scene::SceneConfig& scene) {
-  double tip[3] = {scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()}, index[3];
-  labels->TransformPhysicalPointToContinuousIndex(tip, index);
-  int ijk[3], dims[3];
-  labels->GetDimensions(dims);
-  for (int a = 0; a < 3; ++a) {
-    ijk[a] = int(std::lround(index[a]));
-    if (ijk[a] < 0 || ijk[a] >= dims[a]) return 0;
-  }
-  return int(std::lround(labels->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0)));
-}
-
 // cement_surface.png: the cement's surface, in bone blue, leaked red (CementSurface.h), seen from the side of the
 // largest leak (from the tip towards it, a little from above), so the cement in bone does not hide it.
 void drawCementSurface(const InjectRun& run, const scene::SceneConfig& scene, const fs::path& png) {
   const scene::InjectionSummary& s = run.result.summary;
   rendering::CementSurfaceOptions options;
-  if (const auto leak = largestLeakMm(s)) {
-    double d[3], norm = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      d[axis] = (*leak)[std::size_t(axis)] - (*scene.tipMm)[axis];
-      norm += d[axis] * d[axis];
-    }
-    norm = std::sqrt(norm);
-    if (norm > 1e-6)
-      for (int axis = 0; axis < 3; ++axis) options.viewDirection[axis] = d[axis] / norm + (axis == 2 ? 0.35 : 0.0);
-  }
-  if (s.leakageVolumeMl > 0) {
-    std::ostringstream leakNote;
-    leakNote << std::setprecision(3) << "leaked " << s.leakageVolumeMl << " ml at " << s.leakageSites.size()
-             << (s.leakageSites.size() == 1 ? " site" : " sites");
-    options.note = leakNote.str();
-  }
+  const std::array<double, 3> tipMm{scene.tipMm->x(), scene.tipMm->y(), scene.tipMm->z()};
+  if (const auto leak = largestLeakMm(s))
+    if (const auto view = rendering::viewTowards(tipMm, *leak)) std::copy(view->begin(), view->end(), options.viewDirection);
+  options.note = rendering::leakNote(s.leakageVolumeMl, s.leakageSites.size());
   // The vertebra around the cement, translucent: its label, or (--labels without target_vertebra) the one at the tip.
   options.vertebraMask = run.vertebra;
   options.vertebraLabel = run.vertebraLabel;
   if (run.vertebra && run.vertebraLabel < 0) {
-    options.vertebraLabel = labelAtTip(run.vertebra, scene);
+    options.vertebraLabel = rendering::labelAt(run.vertebra, tipMm);
     if (options.vertebraLabel == 0) options.vertebraMask = nullptr; // the tip is in no labelled structure
   }
   rendering::writeCementSurface(run.cementLabels, png, options);
