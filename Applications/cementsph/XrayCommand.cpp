@@ -29,6 +29,7 @@
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/rendering/RenderBackend.h"
 #include "cementsph/rendering/ProjectedAreaPlot.h"
+#include "cementsph/rendering/XrayFramesLayout.h"
 #include "cementsph/rendering/XrayFramesPicture.h"
 #include "cementsph/study/ScanProvenance.h"
 
@@ -55,10 +56,6 @@ namespace study = cementsph::study;
 namespace rendering = cementsph::rendering;
 using cementsph::app::XrayRequest;
 
-// Outline / curve colours: simulation blue, reference orange (the surface picture's CT is beige, its
-// simulation blue).
-constexpr std::array<unsigned char, 3> kSequenceRgb{0, 110, 255}, kReferenceRgb{255, 120, 0};
-
 std::string number(double x) {
   std::ostringstream s;
   s << std::setprecision(10) << x;
@@ -82,23 +79,6 @@ drr::XraySequence project(const drr::XrayFrameList& frames, const drr::XraySeque
     }
   }
   return s;
-}
-
-std::string timeLabel(double t) {
-  std::ostringstream s;
-  s << "t = " << std::fixed << std::setprecision(1) << (std::abs(t) < 0.05 ? 0.0 : t) << " s";
-  return s.str();
-}
-
-// Columns of the picture: at most maxColumns frames of the sequence, evenly spread, first and last included.
-std::vector<std::size_t> pictureColumns(std::size_t frames, int maxColumns) {
-  const std::size_t m = std::min<std::size_t>(frames, std::size_t(std::max(2, maxColumns)));
-  std::vector<std::size_t> columns;
-  for (std::size_t k = 0; k < m; ++k) {
-    const auto index = std::size_t(std::lround(double(k) * double(frames - 1) / double(m - 1)));
-    if (columns.empty() || columns.back() != index) columns.push_back(index);
-  }
-  return columns;
 }
 
 // Everything that needs no file.
@@ -153,12 +133,12 @@ void computeSequences(const XrayRequest& a, XrayRun& run) {
 void drawFrames(const XrayRun& run, int maxColumns, const std::string& referenceLabel, const fs::path& png) {
   const drr::XraySequence& sequence = *run.sequence;
   std::vector<std::string> labels;
-  rendering::XrayFramesRow simRow{"simulation", {}, kSequenceRgb, drr::drrWindow(sequence)};
-  rendering::XrayFramesRow refRow{referenceLabel, {}, kReferenceRgb,
+  rendering::XrayFramesRow simRow{"simulation", {}, rendering::kXraySequenceRgb, drr::drrWindow(sequence)};
+  rendering::XrayFramesRow refRow{referenceLabel, {}, rendering::kXrayReferenceRgb,
                                   run.reference ? drr::drrWindow(*run.reference) : 0.0};
-  for (std::size_t k : pictureColumns(sequence.frames().size(), maxColumns)) {
+  for (std::size_t k : rendering::xrayFrameColumns(sequence.frames().size(), maxColumns)) {
     const auto& f = sequence.frames()[k];
-    labels.push_back(timeLabel(f.timeS));
+    labels.push_back(rendering::xrayTimeLabel(f.timeS));
     simRow.panels.push_back({f.drr, f.cementMask});
     if (!run.comparison) continue;
     rendering::XrayPanel panel; // empty: no reference frame at this instant
@@ -181,7 +161,8 @@ void drawProjectedArea(const XrayRun& run, const std::string& referenceLabel, co
     if (s == nullptr) continue;
     // The reference's frames are measured instants: markers only (a line would invent values between).
     rendering::ProjectedAreaSeries curve{s == sequence ? "simulation" : referenceLabel, {}, {},
-                                         s == sequence ? kSequenceRgb : kReferenceRgb, s == sequence};
+                                         s == sequence ? rendering::kXraySequenceRgb : rendering::kXrayReferenceRgb,
+                                         s == sequence};
     for (const auto& f : s->frames()) {
       curve.timeS.push_back(f.timeS);
       curve.areaMm2.push_back(f.projectedAreaMm2);
