@@ -663,6 +663,11 @@ private:
                            "clinical direction"
                          : "higher cuts leakage here (raises Ca): opposite to the clinical finding; a shear-thinning "
                            "(viscosity_law carreau) viscous cement (Ca above ~500) gives the clinical direction";
+      // A curing cement: Ca goes with the viscosity the cement has reached times the flow rate, and a slower
+      // injection lets it thicken first, so the two can cancel (VALIDATION.md's curing rows are non-monotone in Q).
+      if (!carreau && scene.curing().kind() != "none")
+        flowRate += "; with this curing cement a slower injection lets it thicken first (Ca ~ viscosity reached x "
+                    "flow rate), so the direction can reverse";
     }
     risk["drivers"] = {
         {"viscosity", on ? "higher cuts leakage (raises Ca), as clinically" : none},
