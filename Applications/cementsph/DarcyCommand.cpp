@@ -7,6 +7,7 @@
 #include "cementsph/sph/DarcyBenchmark.h"
 #include "cementsph/sph/DarcyTable.h"
 #include "cementsph/sph/Presets.h"
+#include "cementsph/sph/Simulation.h"
 #include "cementsph/study/DarcyPlot.h"
 
 #include <omp.h>
@@ -137,9 +138,15 @@ int runDarcy(const DarcyOptions& o) {
     cementsph::study::writeDarcyPlot(results, png);
     std::cout << "wrote " << png.string() << "\n";
   }
-  bool allConverged = true;
-  for (const DarcyResult& r : results) allConverged = allConverged && r.converged;
-  return allConverged ? 0 : 2; // a failed run (README, "Exit status")
+  // A run that did not converge is a failed run (status 2, README "Exit status"); the CSV keeps its row (converged
+  // 0). Thrown, so that main prints the one line even under --quiet (a plain return 2 printed nothing there).
+  std::size_t notConverged = 0;
+  for (const DarcyResult& r : results) notConverged += r.converged ? 0 : 1;
+  if (notConverged > 0)
+    throw cementsph::sph::SimulationError(std::to_string(notConverged) + " of " + std::to_string(results.size()) +
+                                          " runs did not converge within --max-steps-per-force " +
+                                          std::to_string(o.maxSteps) + " (converged 0 in permeability.csv): raise it");
+  return 0;
 }
 
 app::CommandRunner setupDarcy(CLI::App& sub) {

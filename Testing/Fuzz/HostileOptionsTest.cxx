@@ -164,3 +164,21 @@ TEST(HostileOptions, AFifoGivenAsAnInputIsRefusedAtOnce) {
 }
 
 } // namespace
+
+namespace {
+
+// darcy with too few steps to converge: a failed run (status 2) whose reason is one line even under --quiet,
+// naming the option to raise (it returned 2 with nothing on stderr). The CSV keeps the rows, marked converged 0.
+TEST(HostileOptions, ADarcyRunThatDoesNotConvergeSaysSoUnderQuiet) {
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "hostile-darcy";
+  fs::remove_all(out);
+  const ProgramRun r = program({"darcy", "--porosities", "0.5", "--spacings-mm", "1", "--viscosities-pa-s", "10",
+                                "--lattice", "5", "--max-steps-per-force", "10", "--no-plot", "--quiet", "--out",
+                                out.string()});
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("--max-steps-per-force 10"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+}
+
+} // namespace
