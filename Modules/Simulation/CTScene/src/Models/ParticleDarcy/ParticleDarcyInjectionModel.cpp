@@ -869,6 +869,23 @@ private:
     isolated_.assign(n, 0);
     for (std::size_t i = 0; i < n; ++i)
       if (!(diagA_[i] > 0)) isolated_[i] = 1, diagA_[i] = 1.0;
+    // Likewise a cluster cut off behind solid with no p = 0 ghost and no source in it: a pure-Neumann block,
+    // singular (the CG would run to its limit every solve). It has no pressure to carry: pinned at p = 0 by a
+    // Dirichlet term on its rows (its right-hand sides 0).
+    {
+      std::vector<std::size_t> root(n);
+      for (std::size_t i = 0; i < n; ++i) root[i] = i;
+      auto find = [&](std::size_t i) {
+        while (root[i] != i) i = root[i] = root[root[i]];
+        return i;
+      };
+      for (std::size_t q = 0; q < pairI_.size(); ++q) root[find(std::size_t(pairI_[q]))] = find(std::size_t(pairJ_[q]));
+      std::vector<std::uint8_t> anchored(n, 0);
+      for (std::size_t i = 0; i < n; ++i)
+        if (ghostF_[i] > 0 || sourceWeight((x_[i] - tip_).norm(), sourceRadius_, particleRadius_) > 0) anchored[find(i)] = 1;
+      for (std::size_t i = 0; i < n; ++i)
+        if (!isolated_[i] && !anchored[find(i)]) isolated_[i] = 1, diagA_[i] *= 2;
+    }
     const Eigen::Index rows = Eigen::Index(n);
     weights_.assign(n, 0.0);
     double sum = 0;
