@@ -44,13 +44,11 @@ void drawSlices(const CementComparison& c, double injectionZMm, const std::strin
 }
 
 // surfaces.png: the CT and simulated isosurfaces and the distance between them (Fig. 7).
-void drawSurfaces(const CementComparison& c, const std::string& simulatedPath, const std::string& postLabel,
-                  const fs::path& png) {
+void drawSurfaces(const CementComparison& c, const std::string& postLabel, const fs::path& png) {
   // `inject`'s label map beside the simulated CT (continuum bone): leaked cement red.
   cementsph::rendering::SurfaceComparisonOptions options;
-  const fs::path labelsFile = fs::path(simulatedPath).parent_path() / "cement_labels.nrrd";
-  const auto labelsItk = fs::exists(labelsFile) ? cementsph::imaging::readVolume(labelsFile.string()) : nullptr;
-  const auto labels = labelsItk ? cementsph::imaging::toVtk(labelsItk.GetPointer()) : nullptr;
+  // options holds a raw pointer: the VTK copy must outlive the rendering.
+  const auto labels = c.simulatedLabels ? cementsph::imaging::toVtk(c.simulatedLabels.GetPointer()) : nullptr;
   options.simulationLabels = labels;
   options.postTitle = postLabel;
   cementsph::rendering::renderSurfaceComparison(c.ct.surface, c.sim->surface, png, options);
@@ -157,7 +155,7 @@ int runCompare(const CompareRequest& a, study::CementComparison* result) {
     });
     if (comparison.surfaces)
       pictures.drawAndAnnounce("surfaces.png", out / "surfaces.png", [&](const fs::path& png) {
-        drawSurfaces(comparison, a.simulated, postLabel, png);
+        drawSurfaces(comparison, postLabel, png);
       });
   }
   // Which off-screen backend drew the pictures (OSMesa, surfaceless EGL or an X display), in metrics.json.

@@ -9,6 +9,7 @@
 #include <itkIdentityTransform.h>
 
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <stdexcept>
 
@@ -75,7 +76,11 @@ void readVolumes(const CementComparisonRequest& r, const sm::Point3& injection, 
   const auto t = std::chrono::steady_clock::now();
   c.pre = readVolume(r.pre);
   c.registered = readVolume(r.post); // registered in place by alignVolumes
-  if (!r.simulated.empty()) c.simulated = readVolume(r.simulated);
+  if (!r.simulated.empty()) {
+    c.simulated = readVolume(r.simulated);
+    const std::filesystem::path labels = std::filesystem::path(r.simulated).parent_path() / "cement_labels.nrrd";
+    if (std::filesystem::exists(labels)) c.simulatedLabels = readVolume(labels.string());
+  }
   ImageType::IndexType index;
   if (!c.pre->TransformPhysicalPointToIndex(pointOf(injection), index))
     throw std::runtime_error("the injection point (" + std::to_string(injection[0]) + ", " +

@@ -42,6 +42,9 @@ struct CementComparisonRequest {
 // write_s, total_s: the last two once written).
 struct CementComparison {
   imaging::ImageType::Pointer pre, registered, simulated; // simulated on pre's grid; null without one
+  // `inject`'s cement_labels.nrrd beside the simulated CT (which cement leaked: surfaces.png draws it red), as
+  // read; null without a simulated CT or without that file.
+  imaging::ImageType::Pointer simulatedLabels;
   std::optional<imaging::RegistrationResult> registration;
   AnalysedCement ct;
   std::optional<AnalysedCement> sim;
