@@ -518,6 +518,52 @@ TEST(HostileDicom, RescaleThatIsNotAFiniteNonZeroNumberIsRefused) {
   }
 }
 
+// Issue 21 (corpus ids 204/205): a series where one slice's Rescale Intercept or Slope differs from the
+// others. Oracle, independent of the reader: the writer stores HU + 1024 (intercept -1024, slope 1), so the
+// patched slice's true HU are slope' x (written HU + 1024) + intercept'; the other slices keep the written HU.
+// The patched slice is found by the voxels that differ (its index along z is not assumed). Measured with ITK
+// 5.2: ITK's series reader reads each slice's own header, so the series is read right and is accepted (corpus
+// 204/205 expected a refusal; the HU it gave were right). Should a later ITK apply the first slice's rescale to
+// all, this test fails and such a series must be refused in ctSeriesFiles.
+TEST(HostileDicom, PerSliceRescaleIsAppliedToThatSliceOnly) {
+  struct Patch {
+    std::string tag, from, to;
+    double slope, intercept;
+  };
+  for (const Patch& patch : {Patch{std::string("\x28\x00\x52\x10", 4), "-1024 ", "-1000 ", 1.0, -1000.0},
+                             Patch{std::string("\x28\x00\x53\x10", 4), "1 ", "2 ", 2.0, -1024.0},
+                             // A fractional intercept on one slice only: that slice's HU are not whole numbers,
+                             // so its pixel type differs from the others' (int16 rescaled to float).
+                             Patch{std::string("\x28\x00\x52\x10", 4), "-1024 ", "-999.5", 1.0, -999.5}}) {
+    SCOPED_TRACE(patch.to);
+    const fs::path dir = scratch("dicom-rescale-mixed");
+    writeDicomSeries(testImage(), (dir / "series").string(), -1024.0);
+    const fs::path slice = sliceFiles(dir / "series")[2];
+    std::string bytes = readAll(slice);
+    const auto at = bytes.find(patch.tag);
+    ASSERT_NE(at, std::string::npos);
+    const auto value = bytes.find(patch.from, at + 4);
+    ASSERT_LT(value, at + 12) << "the value follows its tag";
+    bytes.replace(value, patch.from.size(), patch.to);
+    writeFile(slice, bytes);
+    const auto back = readVolume((dir / "series").string());
+    const auto v = voxels();
+    std::vector<int> patchedSlices;
+    for (int z = 0; z < kNz; ++z) {
+      std::size_t asWritten = 0, asPatched = 0;
+      for (std::size_t i = std::size_t(z) * kNx * kNy; i < std::size_t(z + 1) * kNx * kNy; ++i) {
+        const double hu = std::round(v[i]);
+        const double read = back->GetBufferPointer()[i];
+        asWritten += std::abs(read - hu) < 0.5;
+        asPatched += std::abs(read - (patch.slope * (hu + 1024.0) + patch.intercept)) < 0.5;
+      }
+      if (asPatched == std::size_t(kNx) * kNy) patchedSlices.push_back(z);
+      else EXPECT_EQ(asWritten, std::size_t(kNx) * kNy) << "slice z=" << z << " neither as written nor as patched";
+    }
+    EXPECT_EQ(patchedSlices.size(), 1u) << "exactly one slice read with the patched rescale";
+  }
+}
+
 // Issue 21, second corpus: header fields that the readers "corrected" without a word. Each file is the valid
 // one written here with one field changed; each refusal names the field.
 TEST(HostileNifti, QuaternionMagicSizeofAndBitpixThatNiftiIoRepairsAreRefused) {
