@@ -82,14 +82,36 @@ void checkOptions(const DarcyOptions& o) {
 ModelPreset darcyPreset(const DarcyOptions& o) {
   ModelPreset preset = modelPreset(o.preset);
   ModelParameters& model = preset.model;
-  if (!o.integrator.empty()) model.integrator = parseIntegrator(o.integrator);
-  if (!o.viscosityModel.empty()) model.viscosityModel = parseViscosityModel(o.viscosityModel);
+  // The parsers' lines name the value and the choices; the option is named here, where it is known.
+  try {
+    if (!o.integrator.empty()) model.integrator = parseIntegrator(o.integrator);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--integrator: ") + e.what());
+  }
+  try {
+    if (!o.viscosityModel.empty()) model.viscosityModel = parseViscosityModel(o.viscosityModel);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--viscosity-model: ") + e.what());
+  }
   if (o.hOverD > 0) preset.hOverD = o.hOverD;
   if (o.dragCoefficient > 0) model.dragCoefficient = o.dragCoefficient;
   if (o.soundSpeed > 0) model.soundSpeed = o.soundSpeed;
   if (o.timeStep > 0) model.fixedTimeStep = o.timeStep;
   model.stepLimitPolicy = o.clampTimeStep ? StepLimitPolicy::Clamp : StepLimitPolicy::Refuse;
   return preset;
+}
+
+// The lattice is a periodic box n d wide, and the neighbour search needs it wider than twice the neighbour-list
+// radius 2h (1 + skin/2) with h = (h/d) d (Simulation's start check): n > 4 (h/d) (1 + skin/2). Checked here
+// so that the line names --lattice and its smallest value, not the simulation's box.
+void checkLatticeFitsNeighbourRadius(int lattice, const ModelPreset& preset) {
+  const double narrowest = 4.0 * preset.hOverD * (1.0 + 0.5 * preset.model.neighbourSkin);
+  if (double(lattice) > narrowest) return;
+  const double smallest = std::floor(narrowest) + 1.0;
+  std::ostringstream s;
+  s << "--lattice: " << lattice << " particles per side make a periodic box narrower than twice the neighbour "
+    << "radius at h/d " << preset.hOverD << "; use --lattice " << smallest << " or more (or a smaller --h-over-d)";
+  throw std::invalid_argument(s.str());
 }
 
 void printCase(std::size_t done, std::size_t total, double porosity, double spacingMm, double viscosityPaS,
@@ -104,6 +126,7 @@ int runDarcy(const DarcyOptions& o) {
   checkOptions(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
   const ModelPreset preset = darcyPreset(o);
+  checkLatticeFitsNeighbourRadius(o.lattice, preset);
   const ModelParameters& model = preset.model;
   SteadyStateCriteria criteria;
   criteria.relativeTolerance = o.tolerance;

@@ -85,6 +85,40 @@ TEST(CementsphCommand, SmallDarcyRunWritesCsvAndPlot) {
   EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 2); // no temporaries
 }
 
+// darcy options the simulation would refuse later with a line naming no option (issue 21, second corpus): each is
+// status 1, one line naming the option, and no output folder. Oracle for --lattice: the periodic box n d must be
+// wider than twice the neighbour-list radius 2h (1 + skin/2), h = (h/d) d, skin 0.2 (ModelParameters), so
+// n > 4 (h/d) 1.1: at the default preset's h/d 1 the least n is 5 (4.4), at --h-over-d 2 it is 9 (8.8).
+TEST(CementsphCommand, DarcyOptionsTheSimulationWouldRefuseAreNamed) {
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {"--lattice 4", {"--lattice: 4 particles", "--lattice 5 or more"}},
+           {"--lattice 8 --h-over-d 2", {"--lattice: 8 particles", "at h/d 2", "--lattice 9 or more"}},
+           {"--lattice 6 --integrator rk4", {"--integrator: unknown integrator 'rk4'"}},
+           {"--lattice 6 --viscosity-model x", {"--viscosity-model: unknown viscosity model 'x'"}}}) {
+    const fs::path out = scratch("darcy-named-option");
+    const Result r = run("darcy --porosities 0.5 --spacings-mm 1 --viscosities-pa-s 10 --max-steps-per-force 2000 "
+                         "--no-plot --quiet --out " + out.string() + " " + args);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.output;
+    for (const std::string& part : expected) EXPECT_NE(r.output.find(part), std::string::npos) << args << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+}
+
+// More cement than the CT can hold: the phantom is a 12 mm block with a 1 mm air margin, (14 mm)^3 = 2.744 ml in
+// all, so 16 ml cannot fit whatever its pores. The line names the option (the pore-space check knows only the
+// volume), status 1, no output folder.
+TEST(CementsphCommand, MoreCementThanThePoresHoldNamesVolumeMl) {
+  const fs::path out = scratch("phantom-too-much-cement");
+  const Result r = run("phantom --size-mm 12 --cell-size-mm 3 --shell-mm 0 --air-margin-mm 1 --quiet --volume-ml 16 "
+                       "--out " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("16 ml to inject"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--volume-ml"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // Conventions every subcommand shares (issue "A toolkit people build on", item 5).
 TEST(CementsphCommand, AnUnknownSubcommandIsNamedWithTheList) {
   const Result r = run("injekt --ct x.nrrd");

@@ -138,7 +138,7 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
     std::ostringstream m;
     m << "no pore space near the tip " << mm(tipMm) << ": the pores connected to it within the "
       << o.roiSizeMm << " mm region hold " << double(s.connectedPoreVoxels) * voxelMm3 * 1e-3 << " ml, less than the "
-      << o.requiredPoreVolumeMm3 * 1e-3 << " ml to inject";
+      << o.requiredPoreVolumeMm3 * 1e-3 << " ml to inject (volume_ml, --volume-ml): inject less or move the tip";
     throw std::invalid_argument(m.str());
   }
 
