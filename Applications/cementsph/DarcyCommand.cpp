@@ -63,8 +63,13 @@ void checkOptions(const DarcyOptions& o) {
   requireAll(o.porosities, "--porosities", [](double p) { return p > 0 && p < 1; });
   requireAll(o.spacingsMm, "--spacings-mm", [](double d) { return d >= 1e-3 && d <= 100; });
   requireAll(o.viscositiesPaS, "--viscosities-pa-s", [](double m) { return m > 0 && m <= 1e7; });
-  if (!o.bodyForces.empty())
+  if (!o.bodyForces.empty()) {
     requireAll(o.bodyForces, "--body-forces-m-per-s2", [](double f) { return f > 0 && f <= 1e6; });
+    // The permeability is the slope of flow against force: one force gives no slope.
+    if (o.bodyForces.size() < 2)
+      throw std::invalid_argument("--body-forces-m-per-s2: give at least two body forces (the permeability is the "
+                                  "slope of the mean velocity against the force), or leave it out for the default sweep");
+  }
   if (o.lattice < 4) throw std::invalid_argument("--lattice: at least 4 particles per side");
   requireWithin(o.lattice, 4, 200, "--lattice", "200^3 particles is the most this benchmark runs");
   // A tolerance of 0 is never met: every body force would run to the step cap.

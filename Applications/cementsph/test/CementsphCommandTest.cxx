@@ -94,7 +94,9 @@ TEST(CementsphCommand, DarcyOptionsTheSimulationWouldRefuseAreNamed) {
            {"--lattice 4", {"--lattice: 4 particles", "--lattice 5 or more"}},
            {"--lattice 8 --h-over-d 2", {"--lattice: 8 particles", "at h/d 2", "--lattice 9 or more"}},
            {"--lattice 6 --integrator rk4", {"--integrator: unknown integrator 'rk4'"}},
-           {"--lattice 6 --viscosity-model x", {"--viscosity-model: unknown viscosity model 'x'"}}}) {
+           {"--lattice 6 --viscosity-model x", {"--viscosity-model: unknown viscosity model 'x'"}},
+           // The permeability is a fitted slope: one force gives none.
+           {"--lattice 6 --body-forces-m-per-s2 5", {"--body-forces-m-per-s2: give at least two"}}}) {
     const fs::path out = scratch("darcy-named-option");
     const Result r = run("darcy --porosities 0.5 --spacings-mm 1 --viscosities-pa-s 10 --max-steps-per-force 2000 "
                          "--no-plot --quiet --out " + out.string() + " " + args);
