@@ -92,7 +92,9 @@ TEST(DemoCommand, VertebraReadsTheDicomSeriesAndReportsTheLeak) {
   std::ifstream injectIn(out / "inject" / "metrics.json");
   const auto inject = nlohmann::json::parse(injectIn);
   for (const auto& [key, value] : m.items())
-    if (key != "wall_time_s" && key != "provenance") EXPECT_EQ(value, inject.at(key)) << key;
+    if (key != "wall_time_s" && key != "provenance") {
+      EXPECT_EQ(value, inject.at(key)) << key;
+    }
   EXPECT_GE(m.at("wall_time_s").get<double>(), inject.at("wall_time_s").get<double>());
   EXPECT_EQ(m.size(), 14u); // 12 figures, the wall time, the provenance
   EXPECT_TRUE(fs::exists(out / "inject" / "injection_pressure.png"));
