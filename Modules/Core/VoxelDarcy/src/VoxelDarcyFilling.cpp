@@ -842,12 +842,13 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   inflow_.clear();
   for (const auto& [c, q] : inflow)
     if (q > 0) inflow_.push_back({c, q * scale});
+  // Refused before anything moves: no half-step left pending, no time or volume advanced.
+  if (flowRate > 0 && inflowSum <= 0)
+    throw FillingError("voxel Darcy: the cement cannot enter the pore space at t = " + std::to_string(time_) + " s");
   const double taken = std::min(dt, stopAfter);
   pendingDt_ = dt - taken > 1e-9 * dt ? dt - taken : 0.0;
   pendingFlowRate_ = flowRate;
   advanceFill(flowRate, taken);
-  if (flowRate > 0 && inflowSum <= 0)
-    throw FillingError("voxel Darcy: the cement cannot enter the pore space at t = " + std::to_string(time_) + " s");
   return taken;
 }
 

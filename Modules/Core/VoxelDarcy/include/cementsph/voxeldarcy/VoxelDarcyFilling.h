@@ -297,7 +297,9 @@ public:
   // new pressure solve, as long as its flow rate is the same and nothing else changed the medium or the
   // outlet (openVoxels, setSource, setEntryPressure, setVoxelViscosity start a fresh step). Within a step
   // the inflows are constant (explicit in time), so a run stopped at output times takes the steps a run
-  // without them takes: its pressure solves do not multiply with the outputs.
+  // without them takes: its pressure solves do not multiply with the outputs. setViscosity and
+  // setShearRateViscosity (a curing or shear-thinning cement, set every call) do not restart the step: its rest
+  // keeps the inflows solved at its start, as in a run without outputs.
   double step(double flowRate, double dtMax, double stopAfter = std::numeric_limits<double>::infinity());
 
   // The state.
