@@ -8,10 +8,12 @@
 #include "cementsph/sph/DarcyTable.h"
 #include "cementsph/sph/Presets.h"
 #include "cementsph/sph/Simulation.h"
+#include "cementsph/scene/SceneSettings.h"
 #include "cementsph/study/DarcyPlot.h"
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -70,6 +72,15 @@ void checkOptions(const DarcyOptions& o) {
       throw std::invalid_argument("--body-forces-m-per-s2: give at least two body forces (the permeability is the "
                                   "slope of the mean velocity against the force), or leave it out for the default sweep");
   }
+  // Each value is a full permeability run (seconds to minutes): 1e5 porosities ran past any wait, as study's sweeps.
+  constexpr std::size_t kMaxSweep = 100;
+  for (const auto& [option, count] : {std::pair<const char*, std::size_t>{"--porosities", o.porosities.size()},
+                                      {"--spacings-mm", o.spacingsMm.size()},
+                                      {"--viscosities-pa-s", o.viscositiesPaS.size()},
+                                      {"--body-forces-m-per-s2", o.bodyForces.size()}})
+    if (count > kMaxSweep)
+      throw std::invalid_argument(std::string(option) + ": " + std::to_string(count) + " values; at most " +
+                                  std::to_string(kMaxSweep) + " (each is a full permeability run)");
   if (o.lattice < 4) throw std::invalid_argument("--lattice: at least 4 particles per side");
   requireWithin(o.lattice, 4, 200, "--lattice", "200^3 particles is the most this benchmark runs");
   // A tolerance of 0 is never met: every body force would run to the step cap.
@@ -127,6 +138,37 @@ void printCase(std::size_t done, std::size_t total, double porosity, double spac
             << " s" << (r.converged ? "" : "  (NOT converged: raise the step cap)") << "\n";
 }
 
+// The model options the user gave, for a run the simulation refuses ("no finite time step" for --drag-coefficient
+// 1e308; "time step 5 s exceeds the ... stability limit" for --time-step-s 5): the line names them.
+std::string givenModelOptions(const DarcyOptions& o) {
+  std::ostringstream s;
+  const std::pair<double, const char*> model[] = {{o.timeStep, "--time-step-s"},
+                                                  {o.dragCoefficient, "--drag-coefficient"},
+                                                  {o.soundSpeed, "--sound-speed-m-per-s"},
+                                                  {o.hOverD, "--h-over-d"}};
+  for (const auto& [x, option] : model)
+    if (x > 0) s << (s.tellp() > 0 ? ", " : "") << option << " " << x;
+  return s.str();
+}
+
+DarcyResult runCase(DarcyBenchmark& bench, const DarcyCase& c, const DarcyOptions& o) {
+  try {
+    return bench.run(c, [](const std::string& line) { std::cerr << "  " << line << "\n"; });
+  } catch (const cementsph::sph::SimulationError& e) {
+    const std::string given = givenModelOptions(o);
+    if (given.empty()) throw;
+    throw std::invalid_argument(given + ": " + e.what() + " (porosity " + scene::exactNumber(c.porosity) +
+                                ", spacing " + scene::exactNumber(c.spacing * 1e3) + " mm)");
+  }
+}
+
+// A failed sweep's files: the table (and a folder this run made, when empty).
+void removeOutputs(const std::string& out, const std::filesystem::path& csvPath, bool outExisted) {
+  std::error_code ec;
+  std::filesystem::remove(csvPath, ec);
+  if (!outExisted && std::filesystem::is_empty(out, ec)) std::filesystem::remove(out, ec);
+}
+
 int runDarcy(const DarcyOptions& o) {
   checkOptions(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
@@ -139,6 +181,7 @@ int runDarcy(const DarcyOptions& o) {
   std::cerr << "cementsph darcy: preset " << preset.name << " (h/d " << preset.hOverD << ", "
             << toString(model.integrator) << ", Cf " << model.dragCoefficient << "), " << o.lattice << "^3 lattice, "
             << omp_get_max_threads() << " threads\n";
+  const bool outExisted = std::filesystem::exists(o.out);
   std::filesystem::create_directories(o.out);
   std::vector<DarcyResult> results;
   // The CSV is rewritten (atomically) after every case, so a long sweep keeps what it has done.
@@ -156,10 +199,17 @@ int runDarcy(const DarcyOptions& o) {
         c.viscosity = mu;
         c.seed = o.seed;
         c.bodyForces = o.bodyForces;
-        results.push_back(bench.run(c, [](const std::string& line) { std::cerr << "  " << line << "\n"; }));
+        results.push_back(runCase(bench, c, o));
         printCase(results.size(), total, phi, spacing, mu, results.back());
         app::writeFileAtomically(csvPath, darcyPermeabilityCsv(results, tableModel));
       }
+  // A table of runs none of which converged holds no permeability: a failed run, and nothing is left behind.
+  if (std::none_of(results.begin(), results.end(), [](const DarcyResult& r) { return r.converged; })) {
+    removeOutputs(o.out, csvPath, outExisted);
+    throw cementsph::sph::SimulationError("none of the " + std::to_string(results.size()) +
+                                          " runs converged within --max-steps-per-force " + std::to_string(o.maxSteps) +
+                                          ": raise it (nothing written)");
+  }
   std::cout << "wrote " << csvPath.string() << "\n";
   if (!o.noPlot) {
     const std::filesystem::path png = std::filesystem::path(o.out) / "permeability.png";

@@ -69,7 +69,7 @@ cementsph::app::CommandRunner setupInject(CLI::App& sub) {
   return [a, &sub]() {
     // Flags given on the command line override the scene file (and --set).
     a->request.settings = cementsph::app::sceneSettings(sub, a->overrides);
-    return cementsph::app::runInject(a->request);
+    return cementsph::app::namingTheOptions(sub, a->request.scene, [&] { return cementsph::app::runInject(a->request); });
   };
 }
 

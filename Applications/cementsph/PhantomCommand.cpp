@@ -12,6 +12,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -112,12 +113,30 @@ int runVertebra(const PhantomArgs& a, const CLI::App& sub) {
   return 0;
 }
 
+// --cell-size-mm against the grid and the block, before any work: a cell under a voxel cannot show in the CT
+// (and 0.001 mm asked for 1.7e12 Voronoi seeds: "out of memory"), and one over the block's smallest edge
+// leaves it no pores ("size_mm: the block has no sub-samples", naming another option).
+void checkCellSize(const FoamOptions& fo) {
+  const double voxelMm = *std::max_element(fo.spacingMm.begin(), fo.spacingMm.end());
+  const double edgeMm = *std::min_element(fo.sizeMm.begin(), fo.sizeMm.end());
+  if (!(fo.cellSizeMm >= voxelMm))
+    throw std::invalid_argument("--cell-size-mm " + cementsph::scene::exactNumber(fo.cellSizeMm) +
+                                ": a cell smaller than a CT voxel (" + cementsph::scene::exactNumber(voxelMm) +
+                                " mm) cannot show in the CT: give " + cementsph::scene::exactNumber(voxelMm) + " mm or more");
+  if (fo.cellSizeMm > edgeMm)
+    throw std::invalid_argument("--cell-size-mm " + cementsph::scene::exactNumber(fo.cellSizeMm) +
+                                ": a cell larger than the block's smallest edge (--size-mm, " +
+                                cementsph::scene::exactNumber(edgeMm) + " mm) leaves it no pores: give at most " +
+                                cementsph::scene::exactNumber(edgeMm) + " mm");
+}
+
 FoamOptions foamOptions(const PhantomArgs& a, const CLI::App& sub) {
   FoamOptions fo;
   if (a.sizeMm.size() == 1) fo.sizeMm = {a.sizeMm[0], a.sizeMm[0], a.sizeMm[0]};
   else if (a.sizeMm.size() == 3) fo.sizeMm = {a.sizeMm[0], a.sizeMm[1], a.sizeMm[2]};
   else if (!a.sizeMm.empty()) throw std::invalid_argument("--size-mm takes one value or three (x,y,z)");
   fo.cellSizeMm = a.cellSizeMm;
+  checkCellSize(fo);
   if (sub.count("--strut-thickness-mm")) {
     if (sub.count("--porosity")) throw std::invalid_argument("give --porosity or --strut-thickness-mm, not both");
     fo.porosity.reset();

@@ -7,6 +7,7 @@
 // (InjectionPlanner.h, PlanOutputs.h); this file parses the options, draws the pictures and prints the summary.
 #include "CommandRegistry.h"
 #include "OutputFiles.h"
+#include "SceneOverrides.h"
 
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/VolumeIO.h"
@@ -42,6 +43,15 @@ struct PlanArgs {
 
 Eigen::Vector3d vec(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 
+// --direction as a unit vector, scaled by its largest component first: the norm of (1, 1, 1e308) overflows, and
+// the vector then normalised to zero ("the shaft ... has no length", naming no option).
+Eigen::Vector3d unitDirection(const std::vector<double>& v) {
+  const Eigen::Vector3d d = vec(v);
+  const double largest = d.cwiseAbs().maxCoeff();
+  if (!(largest > 0)) throw std::invalid_argument("--direction 0,0,0 points nowhere: give a vector into the bone");
+  return (d / largest).normalized();
+}
+
 using namespace cementsph;
 
 planning::PlanRequest planRequest(const PlanArgs& a) {
@@ -58,7 +68,7 @@ planning::PlanRequest planRequest(const PlanArgs& a) {
   r.targetCentreMm = vec(a.target);
   // Without --direction the trajectory is the entry -> target line, and the deepest tip the target itself
   // unless --max-depth-mm says otherwise.
-  r.direction = a.direction.empty() ? Eigen::Vector3d(r.targetCentreMm - r.entryMm) : vec(a.direction);
+  r.direction = a.direction.empty() ? Eigen::Vector3d(r.targetCentreMm - r.entryMm) : unitDirection(a.direction);
   if (a.direction.empty() && !(r.direction.norm() > 0))
     throw std::invalid_argument("--entry-mm and --target-mm are the same point: give the trajectory a length or a --direction");
   r.minDepthMm = a.minDepthMm;
@@ -214,7 +224,7 @@ cementsph::app::CommandRunner setupPlan(CLI::App& sub) {
                "Also plan a second, shallower tip on the trajectory: the cannula withdrawn part-way through the "
                "volume (the two-depth technique)");
   sub.add_flag("--quiet", a->quiet, "No line per evaluation");
-  return [a]() { return runPlan(*a); };
+  return [a, &sub]() { return app::namingTheOptions(sub, a->scene, [&] { return runPlan(*a); }); };
 }
 
 } // namespace

@@ -1,6 +1,7 @@
 #include "SceneOverrides.h"
 
 #include <cmath>
+#include <string>
 #include <stdexcept>
 
 namespace cementsph::app {
@@ -55,6 +56,24 @@ scene::SceneSettings sceneSettings(const CLI::App& sub, const SceneOverrideArgs&
                           {"snapshot_interval_s", "--snapshot-interval-s"},
                           {"preset", "--preset"}};
   return settings;
+}
+
+int namingTheOptions(const CLI::App& sub, const std::string& scenePath, const std::function<int()>& run) {
+  try {
+    return run();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const CLI::Option* labels = sub.get_option_no_throw("--labels");
+    if (labels && labels->count() > 0)
+      for (const std::string head : {"scene: labels_path ", "labels "})
+        if (what.rfind(head, 0) == 0) throw std::invalid_argument("--labels " + what.substr(head.size()));
+    if (what.rfind("tip (", 0) == 0 && what.find("lies outside the CT") != std::string::npos) {
+      const CLI::Option* tip = sub.get_option_no_throw("--tip-mm");
+      if (tip && tip->count() > 0) throw std::invalid_argument("--tip-mm: " + what + ": give a tip inside the CT");
+      throw std::invalid_argument(scenePath + ": key 'tip_mm': " + what + ": give a tip inside the CT");
+    }
+    throw;
+  }
 }
 
 } // namespace cementsph::app

@@ -116,6 +116,24 @@ void checkArgs(const StudyArgs& a) {
                                   std::to_string(kMaxSweep) + " (each is a full injection)");
 }
 
+// Each radius of the size study against the scene keys it must fit (SceneConfig::validate's, for particle_radius_mm):
+// the line names --radii-mm, which set the radius, not the scene's cannula key ("key 'cannula_inner_diameter_mm'
+// must be at least one particle diameter" for `--radii-mm 16`).
+void checkRadiiFitTheScene(const StudyArgs& a, const scene::SceneConfig& base) {
+  if (a.noSizeStudy) return;
+  for (const double r : a.radiiMm) {
+    if (2 * r > base.cannulaInnerDiameterMm)
+      throw std::invalid_argument("--radii-mm " + app::exactNumber(r) + ": a particle " + app::exactNumber(2 * r) +
+                                  " mm across does not fit the cannula (cannula_inner_diameter_mm " +
+                                  app::exactNumber(base.cannulaInnerDiameterMm) + "): give radii up to " +
+                                  app::exactNumber(base.cannulaInnerDiameterMm / 2) + " mm");
+    if (8 * r > base.roiSizeMm)
+      throw std::invalid_argument("--radii-mm " + app::exactNumber(r) + ": the region (roi_size_mm " +
+                                  app::exactNumber(base.roiSizeMm) + ") must be at least 4 particle diameters: give radii up to " +
+                                  app::exactNumber(base.roiSizeMm / 8) + " mm");
+  }
+}
+
 // Everything that can be checked before a run: options, scene, output folder, CT, reference.
 void prepare(const StudyArgs& a, const CLI::App& sub, const parallel::CaseFarm& farm, StudySession& s) {
   checkArgs(a);
@@ -125,6 +143,7 @@ void prepare(const StudyArgs& a, const CLI::App& sub, const parallel::CaseFarm& 
   s.plan.integrators = a.integrators;
   s.plan.viscositiesPaS = a.viscositiesPaS;
   s.plan.referenceIsCt = !a.referenceCt.empty();
+  checkRadiiFitTheScene(a, s.plan.baseScene); // before the plan's own check, which names the scene key
   s.plan.validate();
   app::checkOutputFolder(a.out);
   s.ct = imaging::readVolume(a.ct);

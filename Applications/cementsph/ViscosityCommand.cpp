@@ -10,6 +10,7 @@
 #include "cementsph/study/CannulaViscosity.h"
 
 #include <cstdlib>
+#include <stdexcept>
 #include <iostream>
 
 namespace {
@@ -56,6 +57,18 @@ cementsph::app::CommandRunner setupViscosity(CLI::App& sub) {
           return {};
         },
         "", "positive"));
+  // An unknown gauge is refused while the options are read, the line naming --cannula-gauge (the table's own
+  // message named no option).
+  sub.get_option("--cannula-gauge")->check(CLI::Validator(
+      [](std::string& value) -> std::string {
+        try {
+          (void)cementsph::sph::cannulaInnerDiameterMm(value);
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "", "a known gauge"));
   // The gauge sets the diameter: both given, one was silently ignored.
   sub.get_option("--cannula-gauge")->excludes("--cannula-inner-diameter-mm");
   return [o] { return runViscosity(*o); };

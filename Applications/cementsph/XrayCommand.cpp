@@ -26,6 +26,7 @@
 #include "cementsph/drr/XraySequenceFiles.h"
 #include "cementsph/imaging/ItkVtkBridge.h"
 #include "cementsph/imaging/StagedFolder.h"
+#include "cementsph/scene/SceneSettings.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/rendering/RenderBackend.h"
 #include "cementsph/rendering/ProjectedAreaPlot.h"
@@ -81,8 +82,20 @@ drr::XraySequence project(const drr::XrayFrameList& frames, const drr::XraySeque
   return s;
 }
 
+// Times given on the command line increase, the line naming the option that holds them (the frame list's own
+// check names --sequence, which held the volumes, not the times).
+void checkIncreasingTimes(const std::vector<double>& timesS, const char* option) {
+  for (std::size_t k = 1; k < timesS.size(); ++k)
+    if (!(timesS[k] > timesS[k - 1]))
+      throw std::runtime_error(std::string(option) + ": the times must increase, one per volume (" +
+                               cementsph::scene::exactNumber(timesS[k]) + " s after " +
+                               cementsph::scene::exactNumber(timesS[k - 1]) + " s)");
+}
+
 // Everything that needs no file.
 void checkRequest(const XrayRequest& a) {
+  checkIncreasingTimes(a.sequenceTimesS, "--sequence-times-s");
+  checkIncreasingTimes(a.referenceTimesS, "--reference-times-s");
   (void)cementsph::app::checkedGeometry(a.drr);
   if (!(a.thresholdWaterMm > 0.0) || !std::isfinite(a.thresholdWaterMm))
     throw std::runtime_error("--cement-threshold-water-mm must be a positive number of mm");

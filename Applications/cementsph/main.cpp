@@ -16,12 +16,14 @@
 #include <new>
 
 #include <algorithm>
+#include <cctype>
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <streambuf>
@@ -32,7 +34,13 @@ namespace cementsph::app {
 namespace {
 
 // --threads N beyond the machine's cores only oversubscribes it (and 100000 threads exhausted the
-// process: a segfault), so every subcommand's --threads is capped at the cores; negative is an error.
+// process: a segfault), so every subcommand's --threads is capped at the cores, and the cap is said in one
+// line on stderr (threadsCapNote, printed unless --quiet) rather than silently; negative is an error.
+std::string& threadsCapNote() {
+  static std::string note;
+  return note;
+}
+
 void capThreadsOption(CLI::App& sub) {
   CLI::Option* threads = sub.get_option_no_throw("--threads");
   if (!threads) return;
@@ -42,15 +50,69 @@ void capThreadsOption(CLI::App& sub) {
         try {
           std::size_t used = 0;
           n = std::stol(value, &used);
-          if (used != value.size()) return "must be a whole number of threads (got '" + value + "')";
+          if (used != value.size()) return "must be a whole number of threads (got '" + value.substr(0, 40) + "')";
         } catch (const std::exception&) {
-          return "must be a whole number of threads (got '" + value + "')";
+          return "must be a whole number of threads (got '" + value.substr(0, 40) + "')";
         }
         if (n < 0) return value + " is negative (0: the cores the load average leaves free)";
-        value = std::to_string(std::min<long>(n, omp_get_num_procs()));
+        const long cores = omp_get_num_procs();
+        if (n > cores)
+          threadsCapNote() = "--threads " + value + " is more than this machine's " + std::to_string(cores) +
+                             " cores; using " + std::to_string(cores);
+        value = std::to_string(std::min(n, cores));
         return {};
       },
       "", "cap at the cores"));
+}
+
+// Numbers are read in decimal only. CLI11 reads an integer option's '010' as octal (`plan --starts 010` ran 8
+// starts) and '0x10' as hexadecimal, and strtod takes '0x10' and '0x1p3' for a floating-point one (16 and 8): a
+// value nobody meant, which then failed further on naming another option or a scene key (issue 21's corpus:
+// `--volume-ml 0x10` as "16 ml to inject"). Refused, naming the option (CLI11 puts its name first).
+std::string nonDecimalProblem(const std::string& value, bool integer) {
+  std::size_t i = value.find_first_not_of(" \t");
+  if (i == std::string::npos) return {};
+  if (value[i] == '+' || value[i] == '-') ++i;
+  if (i + 1 < value.size() && value[i] == '0' && std::strchr("xXbBoO", value[i + 1]))
+    return "'" + value.substr(0, 40) + "' is not a decimal number: write the number in decimal";
+  if (integer && i + 1 < value.size() && value[i] == '0' && std::isdigit(static_cast<unsigned char>(value[i + 1])))
+    return "'" + value.substr(0, 40) + "' starts with 0, which would read it as octal: write it without the leading 0";
+  return {};
+}
+
+void requireDecimalNumbers(CLI::App& sub) {
+  for (CLI::Option* option : sub.get_options()) {
+    const std::string type = option->get_type_name();
+    const bool floating = type.find("FLOAT") != std::string::npos;
+    if (!floating && type.find("INT") == std::string::npos) continue;
+    option->check(CLI::Validator([floating](std::string& value) { return nonDecimalProblem(value, !floating); }, "",
+                                 "decimal"));
+  }
+}
+
+// --out is a folder for every subcommand: one that is a file, a symbolic link to nothing, or lies under a file
+// is refused before any work (`plan --out FILE` ran its trajectory check and printed a warning first, then
+// "filesystem error: cannot create directories: Not a directory [...]").
+std::string outputFolderProblem(const std::string& value) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path out(value);
+  const std::string shown = value.size() > 120 ? value.substr(0, 55) + "..." + value.substr(value.size() - 55) : value;
+  if (fs::is_symlink(fs::symlink_status(out, ec)) && !fs::exists(out, ec))
+    return shown + " is a symbolic link to nothing: give a folder, or remove the link";
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    return shown + " is a file, not a folder: give a folder (it is created when missing)";
+  for (fs::path p = out.parent_path(); !p.empty() && p != p.parent_path(); p = p.parent_path())
+    if (fs::exists(p, ec)) {
+      if (!fs::is_directory(p, ec)) return shown + " lies under " + p.string().substr(0, 120) + ", a file: give a folder";
+      break;
+    }
+  return {};
+}
+
+void checkOutputFolderOption(CLI::App& sub) {
+  if (CLI::Option* out = sub.get_option_no_throw("--out"))
+    out->check(CLI::Validator([](std::string& value) { return outputFolderProblem(value); }, "", "a folder"));
 }
 
 // Every floating-point option of every subcommand takes finite numbers only: CLI11's ranges let NaN through (a
@@ -179,8 +241,68 @@ protected:
   std::streamsize xsputn(const char*, std::streamsize n) override { return n; }
 };
 
-// One line: the message with its line breaks turned into spaces (library messages can hold several).
-std::string singleLine(const std::string& text) { return cementsph::imaging::oneLine(text); }
+// One line: the message with its line breaks turned into spaces (library messages can hold several), and any
+// word over 120 characters (a path or a value as given: the corpus of issue 21 had 50 MB scene values and 4 kB
+// paths) shortened to its two ends, so the line stays one a person reads.
+std::string singleLine(const std::string& text) {
+  const std::string line = cementsph::imaging::oneLine(text);
+  constexpr std::size_t kLongWord = 120, kKept = 55;
+  std::string shown;
+  std::size_t start = 0;
+  while (start < line.size()) {
+    const std::size_t space = line.find(' ', start);
+    const std::size_t end = space == std::string::npos ? line.size() : space + 1;
+    const std::string word = line.substr(start, end - start);
+    shown += word.size() > kLongWord ? word.substr(0, kKept) + "..." + word.substr(word.size() - kKept) : word;
+    start = end;
+  }
+  return shown;
+}
+
+// CLI11's "Could not convert: --starts = 1_0" as a line a person reads.
+std::string parseErrorLine(const CLI::ParseError& e) {
+  const std::string what = singleLine(e.what()), head = "Could not convert: ";
+  const std::size_t equals = what.find(" = ");
+  if (what.rfind(head, 0) != 0 || equals == std::string::npos) return what;
+  const std::string value = what.substr(equals + 3);
+  return what.substr(head.size(), equals - head.size()) + ": '" + value.substr(0, 40) + (value.size() > 40 ? "..." : "") +
+         "' is not a number of the kind this option takes (a whole number, or a decimal one)";
+}
+
+// What a command prints on stderr while it runs, passed through line by line, except its warnings
+// ("...: warning: ..."), which are held: printed after a run that succeeds, dropped (printed before the error
+// line under --verbose) when it fails, so that a failed run's stderr is its one error line (`plan --out FILE`
+// printed the trajectory warning, then the error).
+class HoldWarnings : public std::streambuf {
+public:
+  explicit HoldWarnings(std::streambuf* real) : real_(real) {}
+  // The held warnings, and any unfinished line.
+  void release() {
+    endLine();
+    real_->sputn(held_.data(), std::streamsize(held_.size()));
+    held_.clear();
+    real_->pubsync();
+  }
+  void drop() { held_.clear(), line_.clear(); }
+
+protected:
+  int overflow(int c) override {
+    if (c == traits_type::eof()) return traits_type::not_eof(c);
+    line_.push_back(char(c));
+    if (c == '\n' || c == '\r') endLine();
+    return c;
+  }
+  int sync() override { return real_->pubsync(); }
+
+private:
+  void endLine() {
+    if (line_.find(": warning: ") != std::string::npos) held_ += line_;
+    else real_->sputn(line_.data(), std::streamsize(line_.size()));
+    line_.clear();
+  }
+  std::streambuf* real_;
+  std::string line_, held_;
+};
 
 // Adds every registered command as a subcommand of `app` (sorted by name) and returns their runners. --quiet on
 // every subcommand: a command with its own (inject, phantom, plan: no progress line) keeps it; on the others it
@@ -197,6 +319,8 @@ std::map<CLI::App*, cementsph::app::CommandRunner> addSubcommands(CLI::App& app,
     refuseEmptyValues(*sub);
     requireFiniteNumbers(*sub);
     requireUnitRanges(*sub);
+    requireDecimalNumbers(*sub);
+    checkOutputFolderOption(*sub);
     if (!sub->get_option_no_throw("--quiet"))
       sub->add_flag("--quiet", *quiet, "Print nothing but errors (the files are written as usual)");
   }
@@ -209,7 +333,7 @@ int reportParseError(const CLI::App& app, const CLI::ParseError& e, int argc, ch
   std::string name = "cementsph";
   for (const CLI::App* sub : app.get_subcommands()) name += " " + sub->get_name();
   if (!app.get_subcommands().empty()) {
-    std::cerr << name << ": error: " << singleLine(e.what()) << " (see " << name << " --help)\n";
+    std::cerr << name << ": error: " << parseErrorLine(e) << " (see " << name << " --help)\n";
     return kBadInput;
   }
   // No subcommand recognised: name the word that is not one, and list those there are.
@@ -229,11 +353,12 @@ int reportParseError(const CLI::App& app, const CLI::ParseError& e, int argc, ch
 // Runs one command: its exit status, or for what it threw, one line on stderr (the command's name first) and the
 // status of the failure's kind. --quiet: the command's own output is silenced while it runs; the error line
 // comes after, to the real stderr.
-int runCommand(const std::string& name, const cementsph::app::CommandRunner& run, bool quiet) {
+int runCommand(const std::string& name, const cementsph::app::CommandRunner& run, bool quiet, bool verbose) {
   const std::string prefix = "cementsph " + name + ": error: ";
   std::streambuf* const out = std::cout.rdbuf();
   std::streambuf* const err = std::cerr.rdbuf();
-  NullBuffer nothing; // outlives `restore`
+  NullBuffer nothing;       // outlives `restore`
+  HoldWarnings hold(err);   // the same
   struct Restore {
     std::streambuf *out, *err;
     void now() const {
@@ -245,19 +370,26 @@ int runCommand(const std::string& name, const cementsph::app::CommandRunner& run
   if (quiet) {
     std::cout.rdbuf(&nothing);
     std::cerr.rdbuf(&nothing);
+  } else {
+    std::cerr.rdbuf(&hold);
   }
   auto fail = [&](int status, const std::string& message) {
+    if (verbose) hold.release();
+    else hold.drop();
     restore.now();
     std::cerr << prefix << message << "\n";
     return status;
   };
   try {
-    return run();
+    const int status = run();
+    hold.release();
+    return status;
   } catch (const cementsph::parallel::FarmStopped&) { // a worker rank: rank 0 says why
+    hold.drop();
     restore.now();
     return kBadInput;
   } catch (const CLI::ParseError& e) { // a subcommand run by another one (demo: inject, compare)
-    return fail(kBadInput, singleLine(e.what()));
+    return fail(kBadInput, parseErrorLine(e));
   } catch (const std::bad_alloc&) {
     return fail(kFailedRun, "out of memory (a smaller volume, region or particle count needs less)");
   } catch (const cementsph::sph::SimulationError& e) { // unstable, or the cement has nowhere to go
@@ -267,6 +399,14 @@ int runCommand(const std::string& name, const cementsph::app::CommandRunner& run
   } catch (const std::exception& e) {
     return fail(kBadInput, singleLine(e.what()));
   }
+}
+
+// The --threads cap's note (capThreadsOption), unless the subcommand was given --quiet.
+void printThreadsCapNote(const CLI::App& sub, bool quiet) {
+  const CLI::Option* quietOption = sub.get_option_no_throw("--quiet");
+  const std::string& note = cementsph::app::threadsCapNote();
+  if (note.empty() || quiet || (quietOption && quietOption->count() > 0)) return;
+  std::cerr << "cementsph " << sub.get_name() << ": note: " << note << "\n";
 }
 
 } // namespace
@@ -316,7 +456,8 @@ int main(int argc, char** argv) {
     CLI::App* sub = app.get_subcommand(command.name);
     if (!sub->parsed()) continue;
     if (quietRank && !command.spreadsOverRanks) return 0; // rank 0 runs this command alone
-    return runCommand(command.name, runners.at(sub), quiet);
+    printThreadsCapNote(*sub, quiet);
+    return runCommand(command.name, runners.at(sub), quiet, verbose);
   }
   return kBadInput;
 }

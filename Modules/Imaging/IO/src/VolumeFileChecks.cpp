@@ -42,6 +42,7 @@ std::string trim(const std::string& s) {
 // A text header read line by line: keys (lower case) -> values, and the byte offset just after the header.
 struct TextHeader {
   std::map<std::string, std::string> fields;
+  std::vector<std::string> order; // the keys as the header gives them, first to last
   std::uintmax_t dataOffset = 0;
   bool complete = false; // the terminating line (blank line for NRRD, ElementDataFile for MetaImage) was seen
   bool tooLong = false;  // reading stopped at kLongestHeader
@@ -94,6 +95,7 @@ TextHeader readTextHeader(const std::string& path, char separator, const std::st
     }
     const std::string key = lower(trim(t.substr(0, at)));
     h.fields[key] = trim(t.substr(at + width));
+    h.order.push_back(key);
     if (!lastKey.empty() && key == lastKey) {
       h.complete = true;
       break;
@@ -692,6 +694,19 @@ void checkNrrdHeader(const std::string& path) {
   if (!field({"spacings"}) && !field({"space directions"}))
     refuse(path, "NRRD header has neither spacings nor space directions, so the voxel size is unknown (the reader "
                  "would assume 1 mm); add 'spacings: x y z' in mm");
+  // teem reads "space directions" and "space origin" only after "space" (or "space dimension") has named the
+  // space: a header with them first (hand-written; session 6's hostile cases) failed in the reader as "cannot
+  // read (corrupt or truncated ...)", which said nothing of the order.
+  {
+    const auto position = [&](const char* key) {
+      return std::size_t(std::find(h.order.begin(), h.order.end(), key) - h.order.begin());
+    };
+    const std::size_t space = std::min(position("space"), position("space dimension"));
+    for (const char* key : {"space directions", "space origin"})
+      if (position(key) < h.order.size() && position(key) < space)
+        refuse(path, std::string(key) + " comes before any 'space:' or 'space dimension:' line, and the NRRD reader "
+                                        "needs the space named first; put 'space: left-posterior-superior' above it");
+  }
   if (const auto v = field({"spacings"})) {
     if (words(*v).size() != std::size_t(*axes))
       refuse(path, "spacings: " + shownValue(*v) + " is not one spacing per axis (" + std::to_string(*axes) + ")");

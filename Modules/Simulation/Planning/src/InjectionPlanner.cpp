@@ -242,10 +242,11 @@ void PlanRequest::validate(const imaging::ImageType* ct) const {
     throw std::invalid_argument("the volume trim's coverage tolerance must be in [0, 0.5] (a fraction of the target)");
   const int perStart = 2 * parameters() + 2; // BOBYQA's 2n + 1 to begin with, and one more
   if (maxEvaluations > 10000 || maxEvaluations / starts < perStart)
-    throw std::invalid_argument("--max-evaluations must be at most 10000 and give each of the " +
-                                std::to_string(starts) + " starts at least " + std::to_string(perStart) +
-                                " injections (BOBYQA's first 2n + 1 and one more, n = " + std::to_string(parameters()) +
-                                "): at least " + std::to_string(perStart * starts));
+    throw std::invalid_argument("--max-evaluations " + std::to_string(maxEvaluations) + " with --starts " +
+                                std::to_string(starts) + ": at most 10000, and each start needs at least " +
+                                std::to_string(perStart) + " injections (BOBYQA's first 2n + 1 and one more, n = " +
+                                std::to_string(parameters()) + "), " + std::to_string(perStart * starts) +
+                                " for these starts: raise --max-evaluations or lower --starts");
 }
 
 void requireASafeTrajectory(const anatomy::TrajectoryCheck& check, const PlanRequest& r) {

@@ -5,6 +5,7 @@
 #include "cementsph/sph/ModelParameters.h"
 #include "cementsph/sph/Presets.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -32,6 +33,23 @@ std::string shown(const std::string& value) {
 
 [[noreturn]] void fail(const std::string& key, const std::string& what) {
   throw std::invalid_argument("scene: key '" + shown(key) + "' " + what);
+}
+
+// A number's physical range, one line naming the key, the value and limit in the key's unit, why the limit is
+// where it is, and what to do: "scene: key 'volume_ml' is too large: 2000 ml is above 1000 ml (a vertebral body
+// holds 30-50 ml): give the volume in ml". NaN fails both.
+void requireAtLeast(double value, double limit, const char* key, const char* unit, const char* why, const char* advice) {
+  if (value >= limit) return;
+  std::ostringstream what;
+  what << "is too small: " << value << " " << unit << " is below " << limit << " " << unit << " (" << why << "): " << advice;
+  fail(key, what.str());
+}
+
+void requireAtMost(double value, double limit, const char* key, const char* unit, const char* why, const char* advice) {
+  if (value <= limit) return;
+  std::ostringstream what;
+  what << "is too large: " << value << " " << unit << " is above " << limit << " " << unit << " (" << why << "): " << advice;
+  fail(key, what.str());
 }
 
 // Limits that follow from the physics or the machine (README "Bad input"): bone cement sets within
@@ -318,7 +336,8 @@ void applySceneJson(SceneConfig& s, const json& j) {
 void applySceneOverride(SceneConfig& s, const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw std::invalid_argument("scene: override '" + shown(assignment) + "' must be key=value");
+    throw std::invalid_argument("--set '" + shown(assignment) + "': an override must be key=value (a scene key, '=', "
+                                "then a JSON value)");
   const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
   if (value.empty()) fail(key, "has no value");
   json v = json::parse(value, nullptr, /*allow_exceptions=*/false);
@@ -367,24 +386,10 @@ void SceneConfig::validate() const {
   requirePositive(cannulaLengthMm, "cannula_length_mm");
   requirePositive(flowRateMlPerS, "flow_rate_ml_per_s");
   requirePositive(volumeMl, "volume_ml");
-  if (!(volumeMl >= kMinVolumeMl)) {
-    std::ostringstream what;
-    what << "is too small: " << volumeMl << " ml is less than " << kMinVolumeMl
-         << " ml (one cubic millimetre, below a CT voxel): give the volume in ml";
-    fail("volume_ml", what.str());
-  }
-  if (!(volumeMl <= kMaxVolumeMl)) {
-    std::ostringstream what;
-    what << "is too large: " << volumeMl << " ml is above " << kMaxVolumeMl
-         << " ml (a vertebral body holds 30-50 ml): give the volume in ml";
-    fail("volume_ml", what.str());
-  }
-  if (!(flowRateMlPerS <= kMaxFlowRateMlPerS)) {
-    std::ostringstream what;
-    what << "is too large: " << flowRateMlPerS << " ml/s is above " << kMaxFlowRateMlPerS
-         << " ml/s (clinical rates are 0.01-0.5 ml/s): give the rate in ml/s";
-    fail("flow_rate_ml_per_s", what.str());
-  }
+  requireAtLeast(volumeMl, kMinVolumeMl, "volume_ml", "ml", "one cubic millimetre, below a CT voxel", "give the volume in ml");
+  requireAtMost(volumeMl, kMaxVolumeMl, "volume_ml", "ml", "a vertebral body holds 30-50 ml", "give the volume in ml");
+  requireAtMost(flowRateMlPerS, kMaxFlowRateMlPerS, "flow_rate_ml_per_s", "ml/s", "clinical rates are 0.01-0.5 ml/s",
+                "give the rate in ml/s");
   if (!(injectionDurationS() <= kMaxInjectionS)) {
     std::ostringstream what;
     what << "is too small: " << flowRateMlPerS << " ml/s takes " << injectionDurationS() << " s for volume_ml "
@@ -393,18 +398,10 @@ void SceneConfig::validate() const {
     fail("flow_rate_ml_per_s", what.str());
   }
   requirePositive(viscosityPaS, "viscosity_pa_s");
-  if (!(viscosityPaS >= kMinViscosityPaS)) {
-    std::ostringstream what;
-    what << "is too small: " << viscosityPaS << " Pa.s is below " << kMinViscosityPaS
-         << " Pa.s, thinner than water (1e-3 Pa.s; cements are 10 Pa.s and up): give the viscosity in Pa.s";
-    fail("viscosity_pa_s", what.str());
-  }
-  if (!(viscosityPaS <= kMaxViscosityPaS)) {
-    std::ostringstream what;
-    what << "is too large: " << viscosityPaS << " Pa.s is above " << kMaxViscosityPaS
-         << " Pa.s (a setting PMMA dough is 1e4-1e5 Pa.s): give the viscosity in Pa.s";
-    fail("viscosity_pa_s", what.str());
-  }
+  requireAtLeast(viscosityPaS, kMinViscosityPaS, "viscosity_pa_s", "Pa.s",
+                 "thinner than water, 1e-3 Pa.s; cements are 10 Pa.s and up", "give the viscosity in Pa.s");
+  requireAtMost(viscosityPaS, kMaxViscosityPaS, "viscosity_pa_s", "Pa.s", "a setting PMMA dough is 1e4-1e5 Pa.s",
+                "give the viscosity in Pa.s");
   if (viscosityRatePaPerS) requirePositive(*viscosityRatePaPerS, "viscosity_rate_pa_per_s");
   if (!viscosityTable.empty()) {
     for (std::size_t k = 0; k < viscosityTable.size(); ++k) {
@@ -493,6 +490,78 @@ SceneConfig sceneFromJson(const json& j, const std::vector<std::string>& overrid
   return sceneFromJson(j, settings);
 }
 
+namespace {
+
+// Where a scene file stops being JSON, for the one line that refuses it: the line and column, the key whose value
+// (or name) it is in, and the parser's reason without its "[json.exception...]" tag ("line 3, column 21, in key
+// 'viscosity_pa_s': invalid literal"). A tracking-only SAX pass over the text: nothing is built.
+class JsonErrorLocator : public nlohmann::json_sax<json> {
+public:
+  explicit JsonErrorLocator(const std::string& text) : text_(text) {}
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return keys_.emplace_back(), true; }
+  bool key(string_t& k) override {
+    if (!keys_.empty()) keys_.back() = k;
+    return true;
+  }
+  bool end_object() override {
+    if (!keys_.empty()) keys_.pop_back();
+    return true;
+  }
+  bool start_array(std::size_t) override { return true; }
+  bool end_array() override { return true; }
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) override {
+    std::string reason = e.what();
+    if (const auto tag = reason.find("] "); reason.rfind("[json.exception", 0) == 0 && tag != std::string::npos)
+      reason.erase(0, tag + 2);
+    if (const auto at = reason.find(": "); reason.rfind("parse error", 0) == 0 && at != std::string::npos)
+      reason.erase(0, at + 2); // "parse error at line 1, column 5: " is ours to say
+    if (const auto last = reason.find("; last read"); last != std::string::npos) reason.erase(last);
+    if (const auto dash = reason.find(" - "); dash != std::string::npos) reason.erase(0, dash + 3);
+    what_ = where(std::min(position, text_.size())) + ": " + shown(reason);
+    return false;
+  }
+  // "line L, column C[, in key 'K']" for a byte offset into the text.
+  std::string where(std::size_t offset) const {
+    const std::size_t line = 1 + std::size_t(std::count(text_.begin(), text_.begin() + std::ptrdiff_t(offset), '\n'));
+    const std::size_t lineStart = offset == 0 ? 0 : text_.rfind('\n', offset - 1);
+    const std::size_t column = lineStart == std::string::npos || offset == 0 ? offset + 1 : offset - lineStart;
+    std::string at = "line " + std::to_string(line) + ", column " + std::to_string(column);
+    for (auto k = keys_.rbegin(); k != keys_.rend(); ++k)
+      if (!k->empty()) return at + ", in key '" + shown(*k) + "'";
+    return at;
+  }
+  const std::string& what() const { return what_; }
+
+private:
+  const std::string& text_;
+  std::vector<std::string> keys_;
+  std::string what_;
+};
+
+// The refusal of a scene text that is not one JSON object: where and why.
+std::string jsonProblem(const std::string& text) {
+  JsonErrorLocator locator(text);
+  (void)json::sax_parse(text, &locator);
+  return locator.what().empty() ? "not valid JSON" : locator.what();
+}
+
+// Where the byte at `offset` lies: the SAX pass over the text before it, which ends inside the innermost key.
+std::string jsonPlace(const std::string& text, std::size_t offset) {
+  const std::string before = text.substr(0, offset);
+  JsonErrorLocator locator(before);
+  (void)json::sax_parse(before, &locator);
+  return locator.where(offset);
+}
+
+} // namespace
+
 SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings) {
   // Only a regular file is opened: opening a FIFO with no writer blocks forever (`--scene fifo.json` hung), a
   // folder opens and reads as nothing, and a device never ends.
@@ -513,8 +582,8 @@ SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings
   if (text.size() > kMaxSceneBytes)
     throw std::invalid_argument(path + ": the scene file is over 16 MiB; a scene is a JSON object of a few kB");
   if (const auto nul = text.find('\0'); nul != std::string::npos)
-    throw std::invalid_argument(path + ": a NUL byte at offset " + std::to_string(nul) +
-                                ": not a text JSON file (damaged, or something appended to it)");
+    throw std::invalid_argument(path + ": " + jsonPlace(text, nul) + " (byte " + std::to_string(nul) +
+                                "): a NUL byte, not a text JSON file (damaged, or something appended to it)");
   // A key given twice in one object is refused: the parser keeps the last silently, so which of two
   // volumes was injected depended on their order (the corpus of issue 21 found it accepted).
   std::vector<std::set<std::string>> keysOfOpenObjects;
@@ -529,7 +598,8 @@ SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings
   };
   json j = json::parse(text, noteDuplicates, /*allow_exceptions=*/false);
   if (j.is_discarded())
-    throw std::invalid_argument(path + ": not valid JSON (one object, nothing after it); check the file");
+    throw std::invalid_argument(path + ": " + jsonProblem(text) +
+                                ": not valid JSON (a scene is one object, nothing after it); mend the file there");
   if (!duplicateKey.empty())
     throw std::invalid_argument(path + ": key '" + duplicateKey.substr(0, 40) +
                                 "' appears twice in one object: keep the one you mean and remove the other");
@@ -538,6 +608,7 @@ SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings
   } catch (const std::invalid_argument& e) {
     // Blame the command line's setting when it set the key at fault, else the file.
     const std::string what = e.what();
+    if (what.rfind("--set '", 0) == 0) throw; // a malformed --set names itself
     for (const auto& [key, given] : givenSettings(settings))
       if (what.find("'" + key + "'") != std::string::npos)
         throw std::invalid_argument(given + " (command line): " + what);
