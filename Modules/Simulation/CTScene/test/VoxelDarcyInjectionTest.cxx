@@ -4,7 +4,10 @@
 //    within 2 %, and the same cement (simulated CTs equal to 0.01 HU, so the surfaces coincide);
 //  * the cement's volume is the injected volume at every snapshot (within 1 %; by construction to 1e-9);
 //  * no cement in a solid voxel (read from the simulated CT against the input's HU);
-//  * the files of an injection, and the metrics' keys.
+//  * the files of an injection, and the metrics' keys;
+//  * every snapshot file, read back with VTK's reader, holds the volume injected at its time (flow rate x time)
+//    and the interstitial velocity darcy_velocity / porosity, one vertex cell per point (issue 23: the
+//    snapshots reuse the arrays of those already written, and write 32-bit vertex ids).
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/InjectionRunner.h"
@@ -13,10 +16,17 @@
 #include <gtest/gtest.h>
 #include <itkImageRegionConstIterator.h>
 #include <itkImageRegionConstIteratorWithIndex.h>
+#include <vtkCellArray.h>
+#include <vtkCellType.h>
 #include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataReader.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
 
 using namespace cementsph;
 using namespace cementsph::scene;
@@ -24,12 +34,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-InjectionRunResult run(double viscosityPaS, const fs::path& out) {
+InjectionRunResult run(double viscosityPaS, const fs::path& out, double snapshotIntervalS = 1.0) {
   fs::remove_all(out);
   const SceneConfig scene = sceneFromJson({{"tip_mm", {13, 13, 13}},
                                            {"volume_ml", 0.3},
                                            {"viscosity_pa_s", viscosityPaS},
-                                           {"snapshot_interval_s", 1.0},
+                                           {"snapshot_interval_s", snapshotIntervalS},
                                            {"cannula_length_mm", 5}});
   InjectionRunOptions o;
   o.outDir = out.string();
@@ -144,4 +154,56 @@ TEST(VoxelDarcyInjection, ACuringCementMultipliesThePowerLawsConsistency) {
   eos["viscosity_law"] = "newtonian";
   eos["pressure_model"] = "equation-of-state";
   EXPECT_THROW(runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(eos), {}), std::invalid_argument);
+}
+
+TEST(VoxelDarcyInjection, EverySnapshotFileHoldsTheVolumeInjectedAtItsTime) {
+  // 0.3 ml at the scene's 0.05 ml/s (6 s) with a snapshot every 0.25 s: 24 files, more than the writer's queue
+  // holds, so later snapshots are made in the arrays of earlier ones once those are on disk.
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "voxel-darcy-snapshots";
+  run(100.0, out, 0.25);
+  const double flowMm3PerS = 0.05e3;
+  std::ifstream pvdFile(out / "particles.pvd");
+  std::stringstream pvd;
+  pvd << pvdFile.rdbuf();
+  const std::string text = pvd.str();
+  const std::regex entry("timestep=\"([^\"]+)\" part=\"0\" file=\"([^\"]+)\"");
+  std::size_t files = 0;
+  vtkIdType previousPoints = 0;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it, ++files) {
+    const double t = std::stod((*it)[1]);
+    const std::string name = (*it)[2];
+    auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+    reader->SetFileName((out / name).string().c_str());
+    reader->Update();
+    ASSERT_EQ(reader->GetErrorCode(), 0) << name;
+    vtkPolyData* poly = reader->GetOutput();
+    const vtkIdType n = poly->GetNumberOfPoints();
+    ASSERT_GT(n, 0) << name;
+    EXPECT_GE(n, previousPoints) << name; // cement is only ever added
+    previousPoints = n;
+    // The cement's volume is the injected volume by construction (the inflows add up to the flow rate), to
+    // round-off; the fill of the front voxels does not move it.
+    auto* volume = poly->GetPointData()->GetArray("cement_volume_mm3");
+    ASSERT_NE(volume, nullptr) << name;
+    double mm3 = 0;
+    for (vtkIdType i = 0; i < n; ++i) mm3 += volume->GetTuple1(i);
+    EXPECT_NEAR(mm3, flowMm3PerS * t, 1e-6 * flowMm3PerS * t) << name << " at " << t << " s";
+    // The cement's own velocity is the Darcy flux over the porosity (float arrays: 1e-6 relative).
+    auto *q = poly->GetPointData()->GetArray("darcy_velocity_m_per_s"), *v = poly->GetPointData()->GetArray("velocity_m_per_s"),
+         *phi = poly->GetPointData()->GetArray("porosity");
+    ASSERT_TRUE(q && v && phi) << name;
+    double worst = 0;
+    for (vtkIdType i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const double expected = q->GetComponent(i, a) / phi->GetTuple1(i);
+        worst = std::max(worst, std::abs(v->GetComponent(i, a) - expected) / std::max(std::abs(expected), 1e-12));
+      }
+    EXPECT_LT(worst, 1e-6) << name;
+    // One vertex cell per point, point i in cell i.
+    ASSERT_EQ(poly->GetNumberOfCells(), n) << name;
+    ASSERT_EQ(poly->GetVerts()->GetNumberOfCells(), n) << name;
+    EXPECT_EQ(poly->GetCellType(n - 1), VTK_VERTEX) << name;
+    EXPECT_EQ(poly->GetVerts()->GetConnectivityArray()->GetTuple1(n - 1), double(n - 1)) << name;
+  }
+  EXPECT_EQ(files, 24u); // at 0.25, 0.5, ..., 5.75 s and the end (6 s)
 }

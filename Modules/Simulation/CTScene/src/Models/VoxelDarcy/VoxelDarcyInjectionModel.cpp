@@ -87,7 +87,7 @@
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
-#include <vtkIdTypeArray.h>
+#include <vtkTypeInt32Array.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 
@@ -217,7 +217,6 @@ double leakage(const VoxelDarcyFilling& f, const std::vector<std::uint8_t>& soft
   return total;
 }
 
-// One point per voxel holding cement.
 // The wet voxels in index order, kept between snapshots: the filling only appends to its wet list, so each
 // snapshot sorts its newcomers and merges them in (linear), rather than sorting them all again (a snapshot's
 // sort was 3 % of a 5 ml run in perf).
@@ -236,38 +235,79 @@ struct SortedWetVoxels {
   }
 };
 
+// What a snapshot's making keeps from one snapshot to the next: the wet voxels in order, the gathered states,
+// and the polydata handed out, whose arrays the next snapshot reuses once nobody else holds them (the writer's
+// thread has written and dropped it). A hundred snapshots of fresh arrays cost as much in page faults (the
+// allocator hands the freed memory back to the system and takes it again) as in filling the arrays: sys time
+// 0.55 s against 0.29 s on the 5 ml phantom run (issue 23).
+struct SnapshotBuffers {
+  static constexpr std::size_t kKept = 8; // the writer's queue (4), the one it writes, the driver's, spare
+  SortedWetVoxels wetInOrder;
+  std::vector<std::size_t> cells;
+  std::vector<VoxelDarcyFilling::VoxelState> states;
+  std::vector<vtkSmartPointer<vtkPolyData>> handedOut;
+
+  // A polydata handed out earlier that only this holds now (none: nullptr), taken out of handedOut.
+  vtkSmartPointer<vtkPolyData> takeReleased() {
+    for (auto it = handedOut.begin(); it != handedOut.end(); ++it)
+      if ((*it)->GetReferenceCount() == 1) { // atomic: the other thread's last use happened before its release
+        vtkSmartPointer<vtkPolyData> released = *it;
+        handedOut.erase(it);
+        return released;
+      }
+    return nullptr;
+  }
+};
+
+// An array of `released` by name and type that nobody else holds, sized to n tuples with room to grow (a
+// quarter more, so that the next, larger snapshots do not allocate again); else a new one.
+template <typename Array>
+vtkSmartPointer<Array> snapshotArray(vtkPolyData* released, vtkDataArray* releasedPoints, const char* name,
+                                     int components, vtkIdType n) {
+  vtkSmartPointer<Array> array;
+  vtkDataArray* old = releasedPoints ? releasedPoints
+                                     : released ? released->GetPointData()->GetArray(name) : nullptr;
+  if (auto* typed = Array::SafeDownCast(old); typed && typed->GetNumberOfComponents() == components &&
+                                              typed->GetReferenceCount() == 1)
+    array = typed;
+  else
+    array = vtkSmartPointer<Array>::New();
+  array->SetName(name);
+  array->SetNumberOfComponents(components);
+  if (array->GetSize() < n * components) array->Allocate((n + n / 4) * components);
+  array->SetNumberOfTuples(n);
+  return array;
+}
+
+// One point per voxel holding cement.
 vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity,
-                                                    SortedWetVoxels& wetInOrder) {
+                                                    SnapshotBuffers& buffers) {
   const VoxelMedium& m = f.medium();
   // The wet voxels, not the whole region (issue 23: a snapshot costs what the cement holds), in index order
   // as before so that the points come out in the same order.
   // Each voxel's fields from one brick lookup (voxelState), not one per field: a fifth of a snapshot's cost.
-  std::vector<std::size_t> cells;
-  std::vector<VoxelDarcyFilling::VoxelState> states;
-  cells.reserve(f.wetVoxels().size());
-  states.reserve(f.wetVoxels().size());
-  for (std::size_t c : wetInOrder.update(f.wetVoxels())) {
+  std::vector<std::size_t>& cells = buffers.cells;
+  std::vector<VoxelDarcyFilling::VoxelState>& states = buffers.states;
+  cells.clear();
+  states.clear();
+  for (std::size_t c : buffers.wetInOrder.update(f.wetVoxels())) {
     const VoxelDarcyFilling::VoxelState s = f.voxelState(c);
     if (!(s.fill > 0)) continue;
     cells.push_back(c);
     states.push_back(s);
   }
   const vtkIdType n = vtkIdType(cells.size());
+  vtkSmartPointer<vtkPolyData> released = buffers.takeReleased();
+  vtkPolyData* old = released.Get();
   auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToFloat(); // mm to 1e-4 of a 40 mm region; half the bytes of doubles
-  points->SetNumberOfPoints(n);
+  // mm to 1e-4 of a 40 mm region in single precision; half the bytes of doubles
+  points->SetData(snapshotArray<vtkFloatArray>(old, old ? old->GetPoints()->GetData() : nullptr, "Points", 3, n));
   // Single precision (half the bytes to write a hundred times a run), but the fill and the volumes in double:
   // they add up to the injected volume. The arrays are filled through their raw pointers: SetTuple's virtual
   // call per value was a fifth of a snapshot's cost (perf, 5 ml phantom run).
-  auto make = [n](auto array, const char* name, int components) {
-    array->SetName(name);
-    array->SetNumberOfComponents(components);
-    array->SetNumberOfTuples(n);
-    return array;
-  };
-  auto doubles = [&](const char* name) { return make(vtkSmartPointer<vtkDoubleArray>::New(), name, 1); };
+  auto doubles = [&](const char* name) { return snapshotArray<vtkDoubleArray>(old, nullptr, name, 1, n); };
   auto floats = [&](const char* name, int components = 1) {
-    return make(vtkSmartPointer<vtkFloatArray>::New(), name, components);
+    return snapshotArray<vtkFloatArray>(old, nullptr, name, components, n);
   };
   auto fill = doubles("fill_fraction"), volume = doubles("cement_volume_mm3");
   auto pressure = floats("pressure_pa"), velocity = floats("darcy_velocity_m_per_s", 3),
@@ -280,10 +320,15 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
         *viscosityOut = viscosity->GetPointer(0), *porosityOut = porosity->GetPointer(0),
         *permeabilityOut = permeability->GetPointer(0), *arrivalOut = arrival->GetPointer(0),
         *ageOut = age->GetPointer(0), *speedOut = speed->GetPointer(0), *densityOut = density->GetPointer(0);
-  auto offsets = vtkSmartPointer<vtkIdTypeArray>::New(), connectivity = vtkSmartPointer<vtkIdTypeArray>::New();
-  offsets->SetNumberOfValues(n + 1);
-  connectivity->SetNumberOfValues(n);
-  vtkIdType *offsetOut = offsets->GetPointer(0), *connectivityOut = connectivity->GetPointer(0);
+  // One vertex cell per point, with 32-bit offsets and connectivity (the files say Int32; VTK and ParaView
+  // read them as 64-bit ones): 8 of a voxel's 96 bytes a snapshot writes.
+  vtkCellArray* oldVerts = old ? old->GetVerts() : nullptr;
+  if (n >= vtkIdType(std::numeric_limits<vtkTypeInt32>::max())) throw std::length_error(
+      "cement snapshot: " + std::to_string(n) + " voxels hold cement, over the 2^31 a snapshot's vertices can number");
+  auto offsets = snapshotArray<vtkTypeInt32Array>(nullptr, oldVerts ? oldVerts->GetOffsetsArray() : nullptr, "", 1, n + 1);
+  auto connectivity =
+      snapshotArray<vtkTypeInt32Array>(nullptr, oldVerts ? oldVerts->GetConnectivityArray() : nullptr, "", 1, n);
+  vtkTypeInt32 *offsetOut = offsets->GetPointer(0), *connectivityOut = connectivity->GetPointer(0);
   for (vtkIdType i = 0; i < n; ++i) {
     const std::size_t c = cells[std::size_t(i)];
     const VoxelDarcyFilling::VoxelState& s = states[std::size_t(i)];
@@ -304,10 +349,11 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     permeabilityOut[i] = float(m.permeability[c]);
     arrivalOut[i] = float(s.arrival);
     ageOut[i] = float(f.time() - s.arrival);
-    offsetOut[i] = i; // one vertex per cell
-    connectivityOut[i] = i;
+    offsetOut[i] = vtkTypeInt32(i); // one vertex per cell
+    connectivityOut[i] = vtkTypeInt32(i);
   }
-  offsetOut[n] = n;
+  offsetOut[n] = vtkTypeInt32(n);
+  released = nullptr; // its arrays now belong to the new polydata alone
   auto verts = vtkSmartPointer<vtkCellArray>::New();
   verts->SetData(offsets, connectivity);
   auto poly = vtkSmartPointer<vtkPolyData>::New();
@@ -316,6 +362,7 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
   for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, volume, pressure, velocity, viscosity, porosity,
                                                                permeability, arrival, age, speed, density})
     poly->GetPointData()->AddArray(a);
+  if (buffers.handedOut.size() < SnapshotBuffers::kKept) buffers.handedOut.push_back(poly);
   return poly;
 }
 
@@ -458,7 +505,7 @@ public:
     return rho;
   }
 
-  vtkSmartPointer<vtkPolyData> cement() const override { return cementVoxelsToPolyData(*filling_, rho0_, wetInOrder_); }
+  vtkSmartPointer<vtkPolyData> cement() const override { return cementVoxelsToPolyData(*filling_, rho0_, snapshots_); }
 
   void report(InjectionSummary& s, json& e) const override {
     const SceneConfig& scene = *scene_;
@@ -874,7 +921,7 @@ private:
   std::vector<float> tractPorosity_;
   std::vector<double> tractPermeability_;
   std::unique_ptr<VoxelDarcyFilling> filling_;
-  mutable SortedWetVoxels wetInOrder_; // the snapshots' point order (cement() is const to the driver)
+  mutable SnapshotBuffers snapshots_; // kept between snapshots (cement() is const to the driver)
   std::optional<sph::ViscositySchedule> viscosity_;
   std::shared_ptr<const sph::Rheology> law_;
   TipRecord outlet_{0, 0, 0};
