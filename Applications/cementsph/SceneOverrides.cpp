@@ -64,14 +64,23 @@ int namingTheOptions(const CLI::App& sub, const std::string& scenePath, const st
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();
     const CLI::Option* labels = sub.get_option_no_throw("--labels");
-    if (labels && labels->count() > 0)
+    if (labels && labels->count() > 0) {
       for (const std::string head : {"scene: labels_path ", "labels "})
         if (what.rfind(head, 0) == 0) throw std::invalid_argument("--labels " + what.substr(head.size()));
+      if (what.rfind(labels->results().front() + ": ", 0) == 0) throw std::invalid_argument("--labels " + what);
+    }
     if (what.rfind("tip (", 0) == 0 && what.find("lies outside the CT") != std::string::npos) {
       const CLI::Option* tip = sub.get_option_no_throw("--tip-mm");
       if (tip && tip->count() > 0) throw std::invalid_argument("--tip-mm: " + what + ": give a tip inside the CT");
       throw std::invalid_argument(scenePath + ": key 'tip_mm': " + what + ": give a tip inside the CT");
     }
+    throw;
+  } catch (const std::runtime_error& e) {
+    // The label map's reader refuses it starting with its path ("DIR: folder holds no DICOM series").
+    const CLI::Option* labels = sub.get_option_no_throw("--labels");
+    const std::string path = labels && labels->count() > 0 ? labels->results().front() : std::string();
+    if (!path.empty() && std::string(e.what()).rfind(path + ": ", 0) == 0)
+      throw std::runtime_error("--labels " + std::string(e.what()));
     throw;
   }
 }

@@ -87,7 +87,7 @@ drr::XraySequence project(const drr::XrayFrameList& frames, const drr::XraySeque
 void checkIncreasingTimes(const std::vector<double>& timesS, const char* option) {
   for (std::size_t k = 1; k < timesS.size(); ++k)
     if (!(timesS[k] > timesS[k - 1]))
-      throw std::runtime_error(std::string(option) + ": the times must increase, one per volume (" +
+      throw std::runtime_error(std::string(option) + ": frame times must increase, one per volume (" +
                                cementsph::scene::exactNumber(timesS[k]) + " s after " +
                                cementsph::scene::exactNumber(timesS[k - 1]) + " s)");
 }

@@ -101,7 +101,7 @@ std::string outputFolderProblem(const std::string& value) {
   if (fs::is_symlink(fs::symlink_status(out, ec)) && !fs::exists(out, ec))
     return shown + " is a symbolic link to nothing: give a folder, or remove the link";
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-    return shown + " is a file, not a folder: give a folder (it is created when missing)";
+    return shown + " exists and is not a folder: give a folder (it is created when missing)";
   for (fs::path p = out.parent_path(); !p.empty() && p != p.parent_path(); p = p.parent_path())
     if (fs::exists(p, ec)) {
       if (!fs::is_directory(p, ec)) return shown + " lies under " + p.string().substr(0, 120) + ", a file: give a folder";
@@ -259,9 +259,23 @@ std::string singleLine(const std::string& text) {
   return shown;
 }
 
+// CLI11's "--volume-ml: At Most 1 required but received 2" (an option given twice) in words.
+std::string countErrorLine(const std::string& what) {
+  for (const std::string bound : {"At Most ", "At least "}) {
+    const std::size_t at = what.find(": " + bound), received = what.find(" required but received ");
+    if (at == std::string::npos || received == std::string::npos || received < at) continue;
+    const std::string option = what.substr(0, at), wanted = what.substr(at + 2 + bound.size(), received - at - 2 - bound.size());
+    const std::string got = what.substr(received + std::strlen(" required but received "));
+    if (bound == "At Most " && wanted == "1")
+      return option + ": takes one value but was given " + got + " (the option twice?): give it once";
+    return option + ": takes " + wanted + " values but was given " + got + ": give " + wanted;
+  }
+  return what;
+}
+
 // CLI11's "Could not convert: --starts = 1_0" as a line a person reads.
 std::string parseErrorLine(const CLI::ParseError& e) {
-  const std::string what = singleLine(e.what()), head = "Could not convert: ";
+  const std::string what = countErrorLine(singleLine(e.what())), head = "Could not convert: ";
   const std::size_t equals = what.find(" = ");
   if (what.rfind(head, 0) != 0 || equals == std::string::npos) return what;
   const std::string value = what.substr(equals + 3);

@@ -93,7 +93,7 @@ TEST(HostileCommandLine, AnOutputFolderThatIsAFileOrADanglingLinkIsRefused) {
   fs::create_symlink(dir / "nowhere", dangling);
   const std::string scene = sceneFile(dir);
   for (const auto& [out, problem] : std::vector<std::pair<std::string, std::string>>{
-           {file, "is a file"}, {dangling.string(), "symbolic link to nothing"}, {file + "/sub", "lies under"}}) {
+           {file, "exists and is not a folder"}, {dangling.string(), "symbolic link to nothing"}, {file + "/sub", "lies under"}}) {
     for (const std::vector<std::string>& args :
          {std::vector<std::string>{"inject", "--ct", kCt, "--scene", scene, "--out", out},
           std::vector<std::string>{"plan", "--ct", kCt, "--scene", scene, "--out", out, "--entry-mm", "1,1,1", "--target-mm", "2,2,2"},
@@ -136,7 +136,7 @@ TEST(HostileCommandLine, AnOptionGivenTwiceIsRefused) {
 TEST(HostileCommandLine, DecreasingSequenceTimesNameTheirOption) {
   const fs::path dir = scratch("times"), out = dir / "out";
   expectRefused(run({"xray", "--sequence", kCt + "," + kCt, "--sequence-times-s", "5,1", "--out", out.string()}),
-                {"--sequence-times-s", "increase", "1 s after 5 s"}, out);
+                {"--sequence-times-s", "frame times must increase", "1 s after 5 s"}, out);
 }
 
 // study --radii-mm: a radius whose particle does not fit the cannula names --radii-mm and the limit (the default
@@ -220,4 +220,20 @@ TEST(HostileCommandLine, ThreadsAboveTheCoresAreCappedWithANote) {
   const ProgramRun q = run(quiet);
   EXPECT_EQ(q.exitCode, 0) << q.err;
   EXPECT_EQ(q.err.find("note:"), std::string::npos) << q.err;
+}
+
+// An option of one value given twice, and a vector option given the wrong count, in words (CLI11 said "At Most 1
+// required but received 2"); --labels naming a folder that is no label map names --labels.
+TEST(HostileCommandLine, ValueCountsAndLabelFoldersAreInWords) {
+  const fs::path dir = scratch("counts"), out = dir / "out";
+  const std::string scene = sceneFile(dir);
+  const ProgramRun twice = run({"inject", "--ct", kCt, "--scene", scene, "--out", out.string(), "--volume-ml", "0.05",
+                                "--volume-ml", "0.1"});
+  expectRefused(twice, {"--volume-ml: takes one value but was given 2", "give it once"}, out);
+  EXPECT_EQ(twice.err.find("At Most"), std::string::npos) << twice.err;
+  expectRefused(run({"inject", "--ct", kCt, "--scene", scene, "--out", out.string(), "--tip-mm", "1,2,3,4"}),
+                {"--tip-mm: takes 3 values but was given 4: give 3"}, out);
+  fs::create_directories(dir / "empty");
+  expectRefused(run({"inject", "--ct", kCt, "--scene", scene, "--out", out.string(), "--labels", (dir / "empty").string()}),
+                {"--labels " + (dir / "empty").string() + ": "}, out);
 }

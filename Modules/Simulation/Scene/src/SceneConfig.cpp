@@ -522,7 +522,7 @@ public:
       reason.erase(0, tag + 2);
     if (const auto at = reason.find(": "); reason.rfind("parse error", 0) == 0 && at != std::string::npos)
       reason.erase(0, at + 2); // "parse error at line 1, column 5: " is ours to say
-    if (const auto last = reason.find("; last read"); last != std::string::npos) reason.erase(last);
+    if (const auto more = reason.find("; "); more != std::string::npos) reason.erase(more); // "; last read: ..."
     if (const auto dash = reason.find(" - "); dash != std::string::npos) reason.erase(0, dash + 3);
     what_ = where(std::min(position, text_.size())) + ": " + shown(reason);
     return false;
@@ -596,6 +596,9 @@ SceneConfig loadSceneFile(const std::string& path, const SceneSettings& settings
       duplicateKey = parsed.get<std::string>();
     return true;
   };
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw std::invalid_argument(path + ": the scene file is empty: a scene is one JSON object, such as "
+                                       "{\"tip_mm\": [x, y, z], \"volume_ml\": 1}");
   json j = json::parse(text, noteDuplicates, /*allow_exceptions=*/false);
   if (j.is_discarded())
     throw std::invalid_argument(path + ": " + jsonProblem(text) +

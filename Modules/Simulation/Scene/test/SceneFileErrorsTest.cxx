@@ -75,3 +75,9 @@ TEST(SceneFileErrors, RangeRefusalsNameKeyValueLimitAndUnit) {
   expectOneLineNaming(errorOfSceneText("thin.json", R"({"tip_mm": [1, 2, 3], "viscosity_pa_s": 1e-05})"),
                       {"key 'viscosity_pa_s' is too small: 1e-05 Pa.s is below 0.0001 Pa.s (", "give the viscosity in Pa.s"});
 }
+
+// An empty scene file (or white space only) says so, with what a scene looks like.
+TEST(SceneFileErrors, AnEmptyFileSaysSo) {
+  expectOneLineNaming(errorOfSceneText("empty.json", ""), {"empty.json: the scene file is empty", "tip_mm"});
+  expectOneLineNaming(errorOfSceneText("blank.json", " \n\t\n"), {"blank.json: the scene file is empty"});
+}
