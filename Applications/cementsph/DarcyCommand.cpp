@@ -182,7 +182,6 @@ int runDarcy(const DarcyOptions& o) {
             << toString(model.integrator) << ", Cf " << model.dragCoefficient << "), " << o.lattice << "^3 lattice, "
             << omp_get_max_threads() << " threads\n";
   const bool outExisted = std::filesystem::exists(o.out);
-  std::filesystem::create_directories(o.out);
   std::vector<DarcyResult> results;
   // The CSV is rewritten (atomically) after every case, so a long sweep keeps what it has done.
   const std::filesystem::path csvPath = std::filesystem::path(o.out) / "permeability.csv";
@@ -201,6 +200,7 @@ int runDarcy(const DarcyOptions& o) {
         c.bodyForces = o.bodyForces;
         results.push_back(runCase(bench, c, o));
         printCase(results.size(), total, phi, spacing, mu, results.back());
+        std::filesystem::create_directories(o.out); // after the first run: one the simulation refuses leaves none
         app::writeFileAtomically(csvPath, darcyPermeabilityCsv(results, tableModel));
       }
   // A table of runs none of which converged holds no permeability: a failed run, and nothing is left behind.

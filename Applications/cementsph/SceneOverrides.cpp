@@ -1,5 +1,7 @@
 #include "SceneOverrides.h"
 
+#include "cementsph/sph/Simulation.h"
+
 #include <cmath>
 #include <string>
 #include <stdexcept>
@@ -58,28 +60,51 @@ scene::SceneSettings sceneSettings(const CLI::App& sub, const SceneOverrideArgs&
   return settings;
 }
 
+namespace {
+
+// plan chooses the volume between --min-volume-ml and --max-volume-ml: a line about the volume to inject names
+// those, not inject's --volume-ml, which plan does not have.
+std::string namingPlanVolumes(const CLI::App& sub, std::string what) {
+  const std::string injectVolume = "(volume_ml, --volume-ml)";
+  const auto at = what.find(injectVolume);
+  if (at != std::string::npos && !sub.get_option_no_throw("--volume-ml") && sub.get_option_no_throw("--max-volume-ml"))
+    what.replace(at, injectVolume.size(), "(--min-volume-ml .. --max-volume-ml)");
+  return what;
+}
+
+// The path --labels gave, or "".
+std::string labelsPath(const CLI::App& sub) {
+  const CLI::Option* labels = sub.get_option_no_throw("--labels");
+  return labels && labels->count() > 0 ? labels->results().front() : std::string();
+}
+
+} // namespace
+
 int namingTheOptions(const CLI::App& sub, const std::string& scenePath, const std::function<int()>& run) {
   try {
     return run();
   } catch (const std::invalid_argument& e) {
-    const std::string what = e.what();
-    const CLI::Option* labels = sub.get_option_no_throw("--labels");
-    if (labels && labels->count() > 0) {
+    const std::string what = namingPlanVolumes(sub, e.what()), labels = labelsPath(sub);
+    if (!labels.empty()) {
       for (const std::string head : {"scene: labels_path ", "labels "})
         if (what.rfind(head, 0) == 0) throw std::invalid_argument("--labels " + what.substr(head.size()));
-      if (what.rfind(labels->results().front() + ": ", 0) == 0) throw std::invalid_argument("--labels " + what);
+      if (what.rfind(labels + ": ", 0) == 0) throw std::invalid_argument("--labels " + what);
     }
     if (what.rfind("tip (", 0) == 0 && what.find("lies outside the CT") != std::string::npos) {
       const CLI::Option* tip = sub.get_option_no_throw("--tip-mm");
       if (tip && tip->count() > 0) throw std::invalid_argument("--tip-mm: " + what + ": give a tip inside the CT");
       throw std::invalid_argument(scenePath + ": key 'tip_mm': " + what + ": give a tip inside the CT");
     }
+    if (what != e.what()) throw std::invalid_argument(what);
+    throw;
+  } catch (const sph::SimulationError& e) { // a failed run (status 2): "every one of the injections failed (...)"
+    const std::string what = namingPlanVolumes(sub, e.what());
+    if (what != e.what()) throw sph::SimulationError(what);
     throw;
   } catch (const std::runtime_error& e) {
     // The label map's reader refuses it starting with its path ("DIR: folder holds no DICOM series").
-    const CLI::Option* labels = sub.get_option_no_throw("--labels");
-    const std::string path = labels && labels->count() > 0 ? labels->results().front() : std::string();
-    if (!path.empty() && std::string(e.what()).rfind(path + ": ", 0) == 0)
+    const std::string labels = labelsPath(sub);
+    if (!labels.empty() && std::string(e.what()).rfind(labels + ": ", 0) == 0)
       throw std::runtime_error("--labels " + std::string(e.what()));
     throw;
   }

@@ -237,3 +237,46 @@ TEST(HostileCommandLine, ValueCountsAndLabelFoldersAreInWords) {
   expectRefused(run({"inject", "--ct", kCt, "--scene", scene, "--out", out.string(), "--labels", (dir / "empty").string()}),
                 {"--labels " + (dir / "empty").string() + ": "}, out);
 }
+
+// darcy: more than 100 values in a sweep (1e5 porosities ran past any wait) names the option; a model option the
+// simulation refuses (a fixed time step of 5 s, far past the overdamped limit of about 0.1 s) is named in the line;
+// a sweep in which no run converged (5 steps) leaves no permeability.csv and no folder.
+TEST(HostileCommandLine, DarcySweepsAndModelOptionsNameTheOption) {
+  const fs::path out = scratch("darcy") / "out";
+  std::string porosities = "0.5";
+  for (int k = 1; k <= 100; ++k) porosities += "," + std::to_string(0.5 + 1e-4 * k);
+  expectRefused(run({"darcy", "--out", out.string(), "--porosities", porosities}), {"--porosities: 101 values", "100"}, out);
+  const std::vector<std::string> small{"darcy", "--out", out.string(), "--porosities", "0.8", "--spacings-mm", "1",
+                                       "--viscosities-pa-s", "10", "--lattice", "5", "--no-plot"};
+  std::vector<std::string> step = small;
+  step.insert(step.end(), {"--max-steps-per-force", "20000", "--time-step-s", "5"});
+  const ProgramRun r = run(step);
+  EXPECT_EQ(r.exitCode, 1) << r.err;
+  EXPECT_NE(r.err.find("cementsph darcy: error: --time-step-s 5: time step 5 s exceeds"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out)) << "a refused model option left its folder";
+  std::vector<std::string> fewSteps = small;
+  fewSteps.insert(fewSteps.end(), {"--max-steps-per-force", "5"});
+  const ProgramRun f = run(fewSteps);
+  EXPECT_EQ(f.exitCode, 2) << f.err;
+  EXPECT_NE(f.err.find("none of the 1 runs converged within --max-steps-per-force 5"), std::string::npos) << f.err;
+  EXPECT_FALSE(fs::exists(out)) << "a sweep with no converged run left its folder";
+}
+
+// plan chooses the volume between --min-volume-ml and --max-volume-ml: when every injection fails because the
+// pores hold less than the volume (a 12 mm foam block holds about 2.3 ml; 5 ml asked), the line names those
+// options, not inject's --volume-ml, which plan does not have; status 2 (a failed run), no plan written.
+TEST(HostileCommandLine, APlanWhoseVolumeTheBoneCannotHoldNamesThePlanOptions) {
+  const fs::path dir = scratch("plan-volume"), block = dir / "block", out = dir / "out";
+  const ProgramRun phantom = run({"phantom", "--out", block.string(), "--size-mm", "12", "--cell-size-mm", "3", "--shell-mm",
+                                  "0", "--air-margin-mm", "1", "--volume-ml", "0.1", "--quiet"});
+  ASSERT_EQ(phantom.exitCode, 0) << phantom.err;
+  const std::string scene = writeText(dir / "scene.json", R"({"tip_mm": [6.345, 6.345, 7.25], "volume_ml": 0.05})");
+  const ProgramRun r = run({"plan", "--ct", (block / "pre.nrrd").string(), "--scene", scene, "--out", out.string(),
+                            "--entry-mm", "6.3,6.3,1", "--target-mm", "6.345,6.345,7.25", "--max-evaluations", "6",
+                            "--starts", "1", "--min-volume-ml", "4", "--max-volume-ml", "5", "--quiet"});
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("(--min-volume-ml .. --max-volume-ml)"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("--volume-ml)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "plan.json"));
+}
