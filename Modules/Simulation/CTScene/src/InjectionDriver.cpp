@@ -248,7 +248,8 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   po.restDensity = setup.model.restDensity;
   po.massFactor = scene.solidMassFactor;
   po.requiredPoreVolumeMm3 = scene.volumeMl * 1e3;
-  const PorousSolid solid = buildPorousSolid(ct, *scene.tipMm, po);
+  po.keptPositions = false; // below, for the engines that place fixed particles
+  PorousSolid solid = buildPorousSolid(ct, *scene.tipMm, po);
   setup.solid = &solid;
   const double roiVoxels = double(solid.roiSize[0]) * double(solid.roiSize[1]) * double(solid.roiSize[2]);
   const double roiPorosity = roiVoxels > 0 ? 1.0 - double(solid.solidVoxels) / roiVoxels : 1.0;
@@ -261,6 +262,9 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   choice.model = entry.description;
   setup.choice = &choice;
   setup.model.pressureModel = choice.pressureModel;
+  // The voxel engine reads the solid mask only: the kept solid voxels' centres (24 bytes each, over a million on
+  // a whole-scan region) and their region-sized pass are the particle engines' (issue 23).
+  if (choice.pressureModel != "voxel-darcy") keepSolidNearPores(solid, po.reachMm);
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
   if (o.progress) std::cerr << "inject: bone " << bone.model << ": " << bone.reason << "\n";
   // Keys the user set that this engine does not read: never ignored silently. Printed with the progress lines
@@ -340,13 +344,17 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   summarisePressures(result.tipSeries, s);
   s.volumeHistory.push_back(volumeRecord()); // the final state
   model->report(s, result.engineFigures);
-  const std::vector<double> finalDensity = model->cementDensity(); // kg/m^3 per region voxel, at the end
-  edgeWarnings(*ct, solid, finalDensity, s);
+  {
+    // kg/m^3 per region voxel at the end: 8 bytes a region voxel, freed before the region-sized images below
+    // are made (with them it was the run's peak memory on a whole-scan region, issue 23).
+    const std::vector<double> finalDensity = model->cementDensity();
+    edgeWarnings(*ct, solid, finalDensity, s);
+    result.simulatedCt = simulatedCtOnRoi(ct, solid, finalDensity, hu, rho0);
+  }
   for (std::size_t w = unreadKeys.size(); w < s.warnings.size(); ++w) std::cerr << "inject: warning: " << s.warnings[w] << "\n";
 
   result.particles = model->cement();
   s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());
-  result.simulatedCt = simulatedCtOnRoi(ct, solid, finalDensity, hu, rho0);
   result.regionCt = simulatedCtOnRoi(ct, solid, {}, hu, rho0);
   if (const std::vector<std::uint8_t> cementLabels = model->cementLabels(); !cementLabels.empty())
     result.cementLabels = labelMapOn(result.simulatedCt, cementLabels);

@@ -142,6 +142,15 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
     throw std::invalid_argument(m.str());
   }
 
+  s.spacingMm = spacing;
+  s.particleMass = o.massFactor * o.restDensity * s.grid.voxelVolume();
+  if (o.keptPositions) keepSolidNearPores(s, o.reachMm);
+  return s;
+}
+
+void keepSolidNearPores(PorousSolid& s, double reachMm) {
+  const Eigen::Vector3d& spacing = s.spacingMm;
+  const int nx = s.grid.size[0], ny = s.grid.size[1], nz = s.grid.size[2];
   // Kept solid: a pore voxel at offset (a, b, c), |a| <= ri, |b| <= rj, |c| <= rk, with
   // d2 = (a sx)^2 + (b sy)^2 + (c sz)^2 <= reach^2 (1 + 1e-12). Separably, one axis at a time (each solid
   // voxel scanning every offset within reach cost the whole-scan region O(N r^3)): per row the nearest pore
@@ -149,9 +158,9 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
   // least of that plus (c sz)^2 over the planes within rk. The sums are formed in the same order,
   // ((a sx)^2 + (b sy)^2) + (c sz)^2, and rounding is monotone, so the least sum is exactly the least of the
   // per-offset sums: the same voxels are kept as by testing every offset.
-  const int ri = int(std::floor(o.reachMm / spacing[0])), rj = int(std::floor(o.reachMm / spacing[1])),
-            rk = int(std::floor(o.reachMm / spacing[2]));
-  const double reach2 = o.reachMm * o.reachMm * (1 + 1e-12);
+  const int ri = int(std::floor(reachMm / spacing[0])), rj = int(std::floor(reachMm / spacing[1])),
+            rk = int(std::floor(reachMm / spacing[2]));
+  const double reach2 = reachMm * reachMm * (1 + 1e-12);
   auto squares = [](int r, double h) {
     std::vector<double> q(std::size_t(r) + 1);
     for (int a = 0; a <= r; ++a) q[std::size_t(a)] = std::pow(a * h, 2);
@@ -217,14 +226,13 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
           }
       }
   }
+  s.positions.clear();
   s.positions.reserve(kept);
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
         if (keep[s.grid.index(i, j, k)]) s.positions.push_back(s.grid.centre(i, j, k));
   s.keptVoxels = s.positions.size();
-  s.particleMass = o.massFactor * o.restDensity * s.grid.voxelVolume();
-  return s;
 }
 
 } // namespace cementsph::scene

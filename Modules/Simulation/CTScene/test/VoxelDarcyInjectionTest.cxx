@@ -7,7 +7,7 @@
 //  * the files of an injection, and the metrics' keys;
 //  * every snapshot file, read back with VTK's reader, holds the volume injected at its time (flow rate x time)
 //    and the interstitial velocity darcy_velocity / porosity, one vertex cell per point (issue 23: the
-//    snapshots reuse the arrays of those already written, and write 32-bit vertex ids).
+//    snapshots are written on a second thread while the run goes on, with 32-bit vertex ids).
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/InjectionRunner.h"
@@ -158,7 +158,7 @@ TEST(VoxelDarcyInjection, ACuringCementMultipliesThePowerLawsConsistency) {
 
 TEST(VoxelDarcyInjection, EverySnapshotFileHoldsTheVolumeInjectedAtItsTime) {
   // 0.3 ml at the scene's 0.05 ml/s (6 s) with a snapshot every 0.25 s: 24 files, more than the writer's queue
-  // holds, so later snapshots are made in the arrays of earlier ones once those are on disk.
+  // holds, so the run waits on the writer now and then.
   const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "voxel-darcy-snapshots";
   run(100.0, out, 0.25);
   const double flowMm3PerS = 0.05e3;

@@ -33,6 +33,10 @@ struct PorousSolidOptions {
   double restDensity = 1180.0;        // rho0 [kg/m^3]
   double massFactor = 1.0;            // particle mass = factor rho0 V_voxel
   double requiredPoreVolumeMm3 = 0.0; // connected pore space about the tip must hold at least this
+  // The kept solid voxels and their centres (the particle engines' fixed particles). false: positions stay
+  // empty and keptVoxels 0 until keepSolidNearPores (the voxel engine needs neither: 24 bytes a kept voxel,
+  // a region-sized pass).
+  bool keptPositions = true;
 };
 
 struct PorousSolid {
@@ -46,11 +50,15 @@ struct PorousSolid {
   std::size_t keptVoxels = 0;         // of those, within reach of pore space
   std::size_t connectedPoreVoxels = 0; // pore voxels 6-connected to the tip's voxel
   Eigen::Vector3d lowerM, upperM;     // the ROI's outer box [m] (voxel boxes, not centres)
+  Eigen::Vector3d spacingMm{0, 0, 0}; // the CT's voxel spacing [mm], as the reach is given
 
   // ROI voxel containing point p [m], or false when outside.
   bool voxelOf(const Eigen::Vector3d& p, std::array<int, 3>& ijk) const;
 };
 
 PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d& tipMm, const PorousSolidOptions& options);
+// The kept solid voxels (within reachMm of a pore voxel's centre) into s.positions and s.keptVoxels;
+// buildPorousSolid calls it unless options.keptPositions is false.
+void keepSolidNearPores(PorousSolid& s, double reachMm);
 
 } // namespace cementsph::scene

@@ -235,49 +235,13 @@ struct SortedWetVoxels {
   }
 };
 
-// What a snapshot's making keeps from one snapshot to the next: the wet voxels in order, the gathered states,
-// and the polydata handed out, whose arrays the next snapshot reuses once nobody else holds them (the writer's
-// thread has written and dropped it). A hundred snapshots of fresh arrays cost as much in page faults (the
-// allocator hands the freed memory back to the system and takes it again) as in filling the arrays: sys time
-// 0.55 s against 0.29 s on the 5 ml phantom run (issue 23).
+// What a snapshot's making keeps from one snapshot to the next: the wet voxels in order and the scratch
+// vectors of the gathered states (allocated once, not a hundred times a run).
 struct SnapshotBuffers {
-  static constexpr std::size_t kKept = 8; // the writer's queue (4), the one it writes, the driver's, spare
   SortedWetVoxels wetInOrder;
   std::vector<std::size_t> cells;
   std::vector<VoxelDarcyFilling::VoxelState> states;
-  std::vector<vtkSmartPointer<vtkPolyData>> handedOut;
-
-  // A polydata handed out earlier that only this holds now (none: nullptr), taken out of handedOut.
-  vtkSmartPointer<vtkPolyData> takeReleased() {
-    for (auto it = handedOut.begin(); it != handedOut.end(); ++it)
-      if ((*it)->GetReferenceCount() == 1) { // atomic: the other thread's last use happened before its release
-        vtkSmartPointer<vtkPolyData> released = *it;
-        handedOut.erase(it);
-        return released;
-      }
-    return nullptr;
-  }
 };
-
-// An array of `released` by name and type that nobody else holds, sized to n tuples with room to grow (a
-// quarter more, so that the next, larger snapshots do not allocate again); else a new one.
-template <typename Array>
-vtkSmartPointer<Array> snapshotArray(vtkPolyData* released, vtkDataArray* releasedPoints, const char* name,
-                                     int components, vtkIdType n) {
-  vtkSmartPointer<Array> array;
-  vtkDataArray* old = releasedPoints ? releasedPoints
-                                     : released ? released->GetPointData()->GetArray(name) : nullptr;
-  if (auto* typed = Array::SafeDownCast(old); typed && typed->GetNumberOfComponents() == components &&
-                                              typed->GetReferenceCount() == 1)
-    array = typed;
-  else
-    array = vtkSmartPointer<Array>::New();
-  array->SetName(name);
-  array->SetNumberOfComponents(components);
-  if (array->GetSize() < n * components) array->Allocate((n + n / 4) * components);
-  array->SetNumberOfTuples(n);
-  return array;
-}
 
 // One point per voxel holding cement.
 vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity,
@@ -297,17 +261,21 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     states.push_back(s);
   }
   const vtkIdType n = vtkIdType(cells.size());
-  vtkSmartPointer<vtkPolyData> released = buffers.takeReleased();
-  vtkPolyData* old = released.Get();
   auto points = vtkSmartPointer<vtkPoints>::New();
-  // mm to 1e-4 of a 40 mm region in single precision; half the bytes of doubles
-  points->SetData(snapshotArray<vtkFloatArray>(old, old ? old->GetPoints()->GetData() : nullptr, "Points", 3, n));
+  points->SetDataTypeToFloat(); // mm to 1e-4 of a 40 mm region; half the bytes of doubles
+  points->SetNumberOfPoints(n);
   // Single precision (half the bytes to write a hundred times a run), but the fill and the volumes in double:
   // they add up to the injected volume. The arrays are filled through their raw pointers: SetTuple's virtual
   // call per value was a fifth of a snapshot's cost (perf, 5 ml phantom run).
-  auto doubles = [&](const char* name) { return snapshotArray<vtkDoubleArray>(old, nullptr, name, 1, n); };
+  auto make = [n](auto array, const char* name, int components) {
+    array->SetName(name);
+    array->SetNumberOfComponents(components);
+    array->SetNumberOfTuples(n);
+    return array;
+  };
+  auto doubles = [&](const char* name) { return make(vtkSmartPointer<vtkDoubleArray>::New(), name, 1); };
   auto floats = [&](const char* name, int components = 1) {
-    return snapshotArray<vtkFloatArray>(old, nullptr, name, components, n);
+    return make(vtkSmartPointer<vtkFloatArray>::New(), name, components);
   };
   auto fill = doubles("fill_fraction"), volume = doubles("cement_volume_mm3");
   auto pressure = floats("pressure_pa"), velocity = floats("darcy_velocity_m_per_s", 3),
@@ -321,13 +289,13 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
         *permeabilityOut = permeability->GetPointer(0), *arrivalOut = arrival->GetPointer(0),
         *ageOut = age->GetPointer(0), *speedOut = speed->GetPointer(0), *densityOut = density->GetPointer(0);
   // One vertex cell per point, with 32-bit offsets and connectivity (the files say Int32; VTK and ParaView
-  // read them as 64-bit ones): 8 of a voxel's 96 bytes a snapshot writes.
-  vtkCellArray* oldVerts = old ? old->GetVerts() : nullptr;
+  // read them as any VTP): 8 of a voxel's 96 raw bytes less to build and compress (the files shrink by less:
+  // LZ4 had squeezed the 64-bit ids' zero bytes).
   if (n >= vtkIdType(std::numeric_limits<vtkTypeInt32>::max())) throw std::length_error(
       "cement snapshot: " + std::to_string(n) + " voxels hold cement, over the 2^31 a snapshot's vertices can number");
-  auto offsets = snapshotArray<vtkTypeInt32Array>(nullptr, oldVerts ? oldVerts->GetOffsetsArray() : nullptr, "", 1, n + 1);
-  auto connectivity =
-      snapshotArray<vtkTypeInt32Array>(nullptr, oldVerts ? oldVerts->GetConnectivityArray() : nullptr, "", 1, n);
+  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New(), connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
+  offsets->SetNumberOfValues(n + 1);
+  connectivity->SetNumberOfValues(n);
   vtkTypeInt32 *offsetOut = offsets->GetPointer(0), *connectivityOut = connectivity->GetPointer(0);
   for (vtkIdType i = 0; i < n; ++i) {
     const std::size_t c = cells[std::size_t(i)];
@@ -353,7 +321,6 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     connectivityOut[i] = vtkTypeInt32(i);
   }
   offsetOut[n] = vtkTypeInt32(n);
-  released = nullptr; // its arrays now belong to the new polydata alone
   auto verts = vtkSmartPointer<vtkCellArray>::New();
   verts->SetData(offsets, connectivity);
   auto poly = vtkSmartPointer<vtkPolyData>::New();
@@ -362,7 +329,6 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
   for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, volume, pressure, velocity, viscosity, porosity,
                                                                permeability, arrival, age, speed, density})
     poly->GetPointData()->AddArray(a);
-  if (buffers.handedOut.size() < SnapshotBuffers::kKept) buffers.handedOut.push_back(poly);
   return poly;
 }
 
