@@ -94,7 +94,7 @@ void PressureSolver::pad(const PressureSystem& A) {
 }
 
 template <int L, int U>
-void PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
+double PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
   const int wl = L >= 0 ? L : lowerWidth_, wu = U >= 0 ? U : upperWidth_;
   const int* lc = lowerColumn_.data();
   const double* lv = lowerValue_.data();
@@ -103,13 +103,16 @@ void PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
   const double* dv = diagonalValue_.data();
   const double* pv = previous_.data();
   const double* nv = next_.data();
+  double xy = 0; // x . y, which CG needs next (one pass instead of two)
   for (int i = 0; i < n; ++i) {
     // x[n] is 0: the first row's "previous" and the last row's "next" read it with a zero coefficient.
     double sum = dv[i] * x[i] + pv[i] * x[i > 0 ? i - 1 : n] + nv[i] * x[i + 1];
     for (int e = 0; e < wl; ++e) sum += lv[i * wl + e] * x[lc[i * wl + e]];
     for (int e = 0; e < wu; ++e) sum += uv[i * wu + e] * x[uc[i * wu + e]];
     y[i] = sum;
+    xy += x[i] * sum;
   }
+  return xy;
 }
 
 // MIC(0) as L D L^T with L = I + (strictly lower part of A) D^-1: pivot d_i = a_ii - sum over the lower
@@ -118,34 +121,31 @@ void PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
 void PressureSolver::factor(const PressureSystem& A) {
   constexpr double tau = 0.97, safety = 0.25;
   const int n = A.rows();
-  pivot_.resize(n);
-  inversePivot_.resize(n);
-  previousScaled_.resize(n);
-  nextScaled_.resize(n);
-  upperSum_.resize(n);
+  for (std::vector<double>* v : {&pivot_, &inversePivot_, &previousScaled_, &nextScaled_, &upperSum_})
+    v->resize(std::size_t(n)); // (kept from solve to solve: no fresh pages each step)
   for (int i = 0; i < n; ++i) {
     const double diagonal = A.value[std::size_t(A.diagonal[std::size_t(i)])];
     double e = diagonal;
     for (int k = A.rowStart[std::size_t(i)]; k < A.diagonal[std::size_t(i)]; ++k) {
       const int j = A.column[std::size_t(k)];
       const double a = A.value[std::size_t(k)];
-      e -= (a * a + tau * a * (upperSum_[j] - a)) / pivot_[j];
+      e -= (a * a + tau * a * (upperSum_[std::size_t(j)] - a)) / pivot_[std::size_t(j)];
     }
     if (!(e >= safety * diagonal)) e = diagonal;
-    pivot_[i] = e;
-    inversePivot_[i] = 1.0 / e;
-    previousScaled_[i] = previous_[std::size_t(i)] / e;
-    nextScaled_[i] = next_[std::size_t(i)] / e;
+    pivot_[std::size_t(i)] = e;
+    inversePivot_[std::size_t(i)] = 1.0 / e;
+    previousScaled_[std::size_t(i)] = previous_[std::size_t(i)] / e;
+    nextScaled_[std::size_t(i)] = next_[std::size_t(i)] / e;
     double upper = 0;
     for (int k = A.diagonal[std::size_t(i)] + 1; k < A.rowStart[std::size_t(i) + 1]; ++k) upper += A.value[std::size_t(k)];
-    upperSum_[i] = upper;
+    upperSum_[std::size_t(i)] = upper;
   }
 }
 
 // z = (L D L^T)^-1 r: forward sweep y_i = r_i - sum_k a_ik y_k / d_k (kept as q_i = y_i / d_i), then
 // backward z_i = q_i - sum_j a_ij z_j / d_i over the upper neighbours. z[n] stays 0 (the empty slots').
 template <int L, int U>
-void PressureSolver::preconditionPadded(const double* r, double* z, int n) const {
+double PressureSolver::preconditionPadded(const double* r, double* z, int n) const {
   const int wl = L >= 0 ? L : lowerWidth_, wu = U >= 0 ? U : upperWidth_;
   const int* lc = lowerColumn_.data();
   const double* lv = lowerValue_.data();
@@ -162,59 +162,78 @@ void PressureSolver::preconditionPadded(const double* r, double* z, int n) const
     z[i] = chain;
   }
   chain = 0;
+  double rz = 0; // r . z, which CG needs next
   for (int i = n - 1; i >= 0; --i) {
     double t = 0;
     for (int e = 0; e < wu; ++e) t += uv[i * wu + e] * z[uc[i * wu + e]];
     chain = z[i] - t * inverse[i] - ns[i] * chain;
     z[i] = chain;
+    rz += r[i] * chain;
   }
+  return rz;
 }
 
 PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                              double tolerance, int maxIterations) {
+  if (x.size() != A.rows()) x = Eigen::VectorXd::Zero(A.rows());
+  return solve(A, b.data(), x.data(), tolerance, maxIterations);
+}
+
+PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const double* b, double* x, double tolerance,
+                                             int maxIterations) {
   pad(A);
   if (lowerWidth_ == 2 && upperWidth_ == 2) return run<2, 2>(A, b, x, tolerance, maxIterations); // the voxels' 7 points
   return run<-1, -1>(A, b, x, tolerance, maxIterations);
 }
 
+// Preconditioned CG (as Eigen's ConjugateGradient), each iteration in four passes over the unknowns: the
+// matrix product with p . Ap, the update of x and r with |r|^2, the two triangular sweeps with r . z, and
+// the new direction. Its vectors are kept from solve to solve (std::vector: resized, not reallocated, as
+// the cement grows; reallocating ~10 vectors a step cost a twentieth of a run in page faults).
 template <int L, int U>
-PressureSolver::Result PressureSolver::run(const PressureSystem& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
-                                           double tolerance, int maxIterations) {
+PressureSolver::Result PressureSolver::run(const PressureSystem& A, const double* b, double* x, double tolerance,
+                                           int maxIterations) {
   const int n = A.rows();
   Result result;
-  if (x.size() != n) x = Eigen::VectorXd::Zero(n);
-  const double rhsNorm2 = b.squaredNorm();
+  double rhsNorm2 = 0;
+  for (int i = 0; i < n; ++i) rhsNorm2 += b[i] * b[i];
   if (rhsNorm2 == 0) {
-    x.setZero();
+    std::fill(x, x + n, 0.0);
     return result;
   }
   const double threshold = std::max(tolerance * tolerance * rhsNorm2, std::numeric_limits<double>::min());
   // Vectors of n + 1: entry n is the empty slots' zero.
-  for (Eigen::VectorXd* v : {&r_, &z_, &p_, &q_}) v->setZero(n + 1);
-  Eigen::VectorXd& xs = x;
-  p_.head(n) = xs;
-  multiplyPadded<L, U>(p_.data(), q_.data(), n);
-  p_[n] = 0;
-  auto head = [n](Eigen::VectorXd& v) { return v.head(n); };
-  head(r_) = b - head(q_);
-  double r2 = head(r_).squaredNorm();
+  for (std::vector<double>* v : {&r_, &z_, &p_, &q_}) v->resize(std::size_t(n) + 1);
+  double* r = r_.data();
+  double* z = z_.data();
+  double* p = p_.data();
+  double* q = q_.data();
+  r[n] = z[n] = p[n] = q[n] = 0;
+  std::copy(x, x + n, p);
+  multiplyPadded<L, U>(p, q, n);
+  double r2 = 0;
+  for (int i = 0; i < n; ++i) {
+    r[i] = b[i] - q[i];
+    r2 += r[i] * r[i];
+  }
   if (r2 >= threshold) {
     factor(A);
-    preconditionPadded<L, U>(r_.data(), z_.data(), n);
-    head(p_) = head(z_);
-    double absNew = head(r_).dot(head(z_));
+    double rz = preconditionPadded<L, U>(r, z, n);
+    std::copy(z, z + n, p);
     while (result.iterations < maxIterations) {
-      multiplyPadded<L, U>(p_.data(), q_.data(), n);
-      const double alpha = absNew / head(p_).dot(head(q_));
-      xs += alpha * head(p_);
-      head(r_) -= alpha * head(q_);
-      r2 = head(r_).squaredNorm();
+      const double alpha = rz / multiplyPadded<L, U>(p, q, n);
+      r2 = 0;
+      for (int i = 0; i < n; ++i) {
+        x[i] += alpha * p[i];
+        r[i] -= alpha * q[i];
+        r2 += r[i] * r[i];
+      }
       ++result.iterations;
       if (r2 < threshold) break;
-      preconditionPadded<L, U>(r_.data(), z_.data(), n);
-      const double absOld = absNew;
-      absNew = head(r_).dot(head(z_));
-      head(p_) = head(z_) + (absNew / absOld) * head(p_);
+      const double rzOld = rz;
+      rz = preconditionPadded<L, U>(r, z, n);
+      const double beta = rz / rzOld;
+      for (int i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
     }
   }
   result.relativeResidual = std::sqrt(r2 / rhsNorm2);
@@ -299,6 +318,7 @@ void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const
                                   mm(medium_.centre(c)));
     if (state(c) != kClosed) continue;
     pendingDt_ = 0; // the medium changed: the next step solves afresh
+    frontStale_ = true; // and its front is searched afresh (the voxel may border the cement)
     medium_.porosity[c] = porosity[i]; // > 0: the voxel is a pore voxel from now on
     medium_.permeability[c] = permeability[i];
   }
@@ -345,6 +365,7 @@ void VoxelDarcyFilling::setShearRateViscosity(std::function<double(double)> law,
   if (law && (!(flowIndex > 0) || picard < 1))
     throw std::invalid_argument("voxel Darcy: a shear-rate law needs a flow index > 0 and at least one iteration");
   shearLaw_ = std::move(law);
+  frontStale_ = true;
   flowIndex_ = flowIndex;
   picardIterations_ = shearLaw_ ? picard : 1;
 }
@@ -400,6 +421,7 @@ void VoxelDarcyFilling::setVoxelViscosity(std::vector<double> mu) {
   if (mu.size() != medium_.count()) throw std::invalid_argument("voxel Darcy: one viscosity per voxel");
   voxelViscosity_ = std::move(mu);
   pendingDt_ = 0;
+  frontStale_ = true;
   bricks_.forEachVoxel([&](std::size_t c, VoxelBricks::Brick& b, int local) { b.voxel[local].viscosity = voxelViscosity_[c]; });
   uniformViscosity_ = false;
 }
@@ -488,32 +510,77 @@ void VoxelDarcyFilling::wet(std::size_t c) {
   if (uniformViscosity_ && (!shearLaw_ || !cell.has(VoxelBricks::kInFrontFlag))) cell->viscosity = viscosityValue_;
 }
 
+// The front: every open pore voxel beside a filled one that is not filled itself. Kept from step to step
+// (issue 23: a pass over the filled voxels each step was a thirtieth of a run): the front voxels filled
+// since the last step leave it and the unfilled open neighbours of the voxels filled since join it, which
+// is the same set as a search from every filled voxel, since a voxel never empties. A fresh search where
+// the medium or the viscosity law changed (openVoxels opens new neighbours; a viscosity law resets the
+// front's viscosities).
 void VoxelDarcyFilling::findFront() {
-  for (const VoxelBricks::Cell& cell : frontCell_) cell.set(VoxelBricks::kInFrontFlag, 0);
-  front_.clear();
-  frontCell_.clear();
   const bool uniform = uniformViscosity_ && !shearLaw_;
   const int nx = medium_.size[0], ny = medium_.size[1];
   const std::ptrdiff_t stride[3] = {1, nx, std::ptrdiff_t(nx) * ny};
-  for (std::size_t row = 0; row < filled_.size(); ++row) {
-    const std::size_t c = filled_[row];
-    const auto& v = filledIjk_[row];
+  frontAdded_.clear();
+  auto addNeighbours = [&](std::size_t c, const VoxelBricks::Cell& own, const std::array<int, 3>& v) {
     for (int a = 0; a < 3; ++a)
       for (int sign : {-1, 1}) {
         const int coord = v[std::size_t(a)] + sign;
         if (coord < 0 || coord >= medium_.size[a]) continue;
         const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[a]);
         if (medium_.porosity[m] <= 0) continue; // closed
-        VoxelBricks::Cell cell = bricks_.neighbour(filledCell_[row], v, a, sign);
+        VoxelBricks::Cell cell = bricks_.neighbour(own, v, a, sign);
         if (!cell.brick) cell = touch(m); // the front's state lives in bricks too
         if (cell.has(VoxelBricks::kFilledFlag) || cell.has(VoxelBricks::kInFrontFlag)) continue;
         cell.set(VoxelBricks::kInFrontFlag, 1);
         if (uniform) cell->viscosity = viscosityValue_;
-        front_.push_back(m);
-        frontCell_.push_back(cell);
+        frontAdded_.push_back({m, cell});
       }
+  };
+  if (frontStale_ || !uniform) {
+    for (const VoxelBricks::Cell& cell : frontCell_) cell.set(VoxelBricks::kInFrontFlag, 0);
+    front_.clear();
+    frontCell_.clear();
+    for (std::size_t row = 0; row < filled_.size(); ++row) addNeighbours(filled_[row], filledCell_[row], filledIjk_[row]);
+    frontStale_ = false;
+  } else {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < front_.size(); ++i) {
+      const VoxelBricks::Cell cell = frontCell_[i];
+      if (cell.has(VoxelBricks::kFilledFlag)) {
+        cell.set(VoxelBricks::kInFrontFlag, 0);
+        continue;
+      }
+      front_[kept] = front_[i];
+      frontCell_[kept++] = cell;
+    }
+    front_.resize(kept);
+    frontCell_.resize(kept);
+    for (std::size_t c : justFilled_) {
+      const auto v = bricks_.ijk(c);
+      addNeighbours(c, bricks_.find(v[0], v[1], v[2]), v);
+    }
   }
-  std::sort(front_.begin(), front_.end());
+  justFilled_.clear();
+  // merged into front_ (in voxel order) and frontCell_ (alongside)
+  std::sort(frontAdded_.begin(), frontAdded_.end(),
+            [](const std::pair<std::size_t, VoxelBricks::Cell>& x, const std::pair<std::size_t, VoxelBricks::Cell>& y) {
+              return x.first < y.first;
+            });
+  const std::size_t old = front_.size();
+  front_.resize(old + frontAdded_.size());
+  frontCell_.resize(front_.size());
+  std::size_t a = old, b = frontAdded_.size(), out = front_.size();
+  while (b > 0) { // from the back, in place
+    if (a > 0 && front_[a - 1] > frontAdded_[b - 1].first) {
+      --a;
+      front_[--out] = front_[a];
+      frontCell_[out] = frontCell_[a];
+    } else {
+      --b;
+      front_[--out] = frontAdded_[b].first;
+      frontCell_[out] = frontAdded_[b].second;
+    }
+  }
 }
 
 // Volume beyond a voxel's pore volume moves on to the nearest unfilled pore voxels, reached through
@@ -597,6 +664,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
     filled_.swap(voxels);
     filledCell_.swap(cells);
     filledIjk_.swap(ijk);
+    justFilled_.insert(justFilled_.end(), newlyFilled_.begin(), newlyFilled_.end()); // (findFront's)
     newlyFilled_.clear();
   }
   const int unknowns = int(filled_.size());
@@ -616,7 +684,10 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   std::vector<Link> links;
   links.reserve(front_.size() + 64);
   PressureSystem& A = system_;
-  Eigen::VectorXd b(unknowns), x(unknowns);
+  std::vector<double>& b = rhs_;
+  std::vector<double>& x = solution_;
+  b.resize(std::size_t(unknowns));
+  x.resize(std::size_t(unknowns));
   const bool capillary = !entryPressure_.empty();
   auto frontPressure = [&](std::size_t m) {
     return settings_.frontPressurePa + (capillary ? double(entryPressure_[m]) : 0.0);
@@ -625,7 +696,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   // pressure takes no flux: a no-flux face, as solid).
   auto assemble = [&]() {
     links.clear();
-    b.setZero();
+    std::fill(b.begin(), b.end(), 0.0);
     A.rowStart.resize(std::size_t(unknowns) + 1);
     A.diagonal.resize(std::size_t(unknowns));
     A.column.resize(std::size_t(unknowns) * 7);
@@ -646,7 +717,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
       const std::size_t c = filled_[std::size_t(row)];
       A.rowStart[std::size_t(row)] = nnz;
       const VoxelBricks::Cell own = filledCell_[std::size_t(row)];
-      x[row] = own->pressure;
+      x[std::size_t(row)] = own->pressure;
       const auto& v = filledIjk_[std::size_t(row)];
       const double lc = rowMobility[row];
       double diagonal = 0;
@@ -689,30 +760,30 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
           const double resistance = 0.5 * dist / lc + cell->fill * dist / lm;
           const double t = area / resistance;
           diagonal += t;
-          b[row] += t * frontPressure(m);
+          b[std::size_t(row)] += t * frontPressure(m);
           links.push_back({c, m, t});
         }
       }
       value[diagonalAt] = diagonal;
       A.diagonal[std::size_t(row)] = diagonalAt;
       if (filledSourcePore > 0 && std::binary_search(source_.begin(), source_.end(), c))
-        b[row] += flowRate * poreVolume(c) / filledSourcePore;
+        b[std::size_t(row)] += flowRate * poreVolume(c) / filledSourcePore;
     }
     A.rowStart[std::size_t(unknowns)] = nnz;
   };
   double solveSeconds = 0;
   auto solve = [&]() {
     const auto ts = Clock::now();
-    const PressureSolver::Result r = solver_.solve(A, b, x, settings_.solverTolerance, settings_.maxSolverIterations);
+    const PressureSolver::Result r = solver_.solve(A, b.data(), x.data(), settings_.solverTolerance, settings_.maxSolverIterations);
     ++stats_.solves;
     stats_.iterations += std::size_t(r.iterations);
     stats_.worstResidual = std::max(stats_.worstResidual, r.relativeResidual);
     if (!r.converged) ++stats_.unconverged;
-    if (!x.allFinite())
+    if (!std::all_of(x.begin(), x.end(), [](double v) { return std::isfinite(v); }))
       throw FillingError("voxel Darcy: the pressure solve gave a non-finite value at t = " + std::to_string(time_) + " s");
     for (int row = 0; row < unknowns; ++row) {
       const VoxelBricks::Cell& cell = filledCell_[std::size_t(row)];
-      cell->pressure = x[row];
+      cell->pressure = x[std::size_t(row)];
     }
     solveSeconds += seconds(ts);
     stats_.solveSeconds += seconds(ts);
