@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
@@ -69,14 +70,22 @@ void capThreadsOption(CLI::App& sub) {
 // starts) and '0x10' as hexadecimal, and strtod takes '0x10' and '0x1p3' for a floating-point one (16 and 8): a
 // value nobody meant, which then failed further on naming another option or a scene key (issue 21's corpus:
 // `--volume-ml 0x10` as "16 ml to inject"). Refused, naming the option (CLI11 puts its name first).
-std::string nonDecimalProblem(const std::string& value, bool integer) {
+std::string nonDecimalProblem(const std::string& value, bool integer, bool isUnsigned) {
   std::size_t i = value.find_first_not_of(" \t");
   if (i == std::string::npos) return {};
+  // An unsigned option read '-1' as 2^64 - 1 (`phantom --seed -1` recorded seed 18446744073709551615).
+  if (isUnsigned && value[i] == '-')
+    return "'" + value.substr(0, 40) + "' is negative: give a whole number, 0 or more";
   if (value[i] == '+' || value[i] == '-') ++i;
   if (i + 1 < value.size() && value[i] == '0' && std::strchr("xXbBoO", value[i + 1]))
     return "'" + value.substr(0, 40) + "' is not a decimal number: write the number in decimal";
   if (integer && i + 1 < value.size() && value[i] == '0' && std::isdigit(static_cast<unsigned char>(value[i + 1])))
     return "'" + value.substr(0, 40) + "' starts with 0, which would read it as octal: write it without the leading 0";
+  // Past 64 bits the conversion saturates silently (`--seed 18446744073709551616` ran with 2^64 - 1).
+  errno = 0;
+  if (isUnsigned) (void)std::strtoull(value.c_str(), nullptr, 10);
+  else if (integer) (void)std::strtoll(value.c_str(), nullptr, 10);
+  if (integer && errno == ERANGE) return "'" + value.substr(0, 40) + "' is too large for a whole number of 64 bits";
   return {};
 }
 
@@ -85,8 +94,10 @@ void requireDecimalNumbers(CLI::App& sub) {
     const std::string type = option->get_type_name();
     const bool floating = type.find("FLOAT") != std::string::npos;
     if (!floating && type.find("INT") == std::string::npos) continue;
-    option->check(CLI::Validator([floating](std::string& value) { return nonDecimalProblem(value, !floating); }, "",
-                                 "decimal"));
+    const bool isUnsigned = type.find("UINT") != std::string::npos;
+    option->check(CLI::Validator(
+        [floating, isUnsigned](std::string& value) { return nonDecimalProblem(value, !floating, isUnsigned); }, "",
+        "decimal"));
   }
 }
 

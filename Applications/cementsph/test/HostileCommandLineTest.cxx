@@ -280,3 +280,12 @@ TEST(HostileCommandLine, APlanWhoseVolumeTheBoneCannotHoldNamesThePlanOptions) {
   EXPECT_EQ(r.err.find("--volume-ml)"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out / "plan.json"));
 }
+
+// An unsigned option (phantom --seed) given a negative number or one past 64 bits is refused: CLI11 read '-1' as
+// 2^64 - 1 (the phantom recorded seed 18446744073709551615) and saturated 2^64 to the same.
+TEST(HostileCommandLine, ANegativeNumberForAnUnsignedOptionIsRefused) {
+  const fs::path out = scratch("seed") / "out";
+  expectRefused(run({"phantom", "--out", out.string(), "--seed", "-1"}), {"--seed", "'-1' is negative"}, out);
+  // 2^64 saturated to 2^64 - 1 silently.
+  expectRefused(run({"phantom", "--out", out.string(), "--seed", "18446744073709551616"}), {"--seed", "too large"}, out);
+}
