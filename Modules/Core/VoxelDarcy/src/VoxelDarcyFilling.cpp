@@ -680,7 +680,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   for (std::size_t c : source_) (state(c) == kFilled ? filledSourcePore : openSourcePore) += poreVolume(c);
 
   // Front links: (filled voxel, front voxel, transmissibility).
-  struct Link { std::size_t from, to; double t; };
+  struct Link { std::size_t from, to; double t; VoxelBricks::Cell fromCell, toCell; }; // (cells: no lookups later)
   std::vector<Link> links;
   links.reserve(front_.size() + 64);
   PressureSystem& A = system_;
@@ -741,7 +741,9 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
         if (cell.has(VoxelBricks::kBarredFlag)) continue;
         const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
         if (cell.has(VoxelBricks::kFilledFlag)) {
-          const int other = cell->unknown;
+          // The -x and +x neighbours, when filled, are the rows just before and after (rows in voxel
+          // order): no read of their numbering.
+          const int other = axis == 0 ? row + sign : cell->unknown;
           double t;
           if (sign < 0) {
             t = upperT[3 * other + axis]; // the lower row's
@@ -751,7 +753,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
             upperT[3 * row + axis] = t;
           }
           diagonal += t;
-          inner[nnz] = cell->unknown;
+          inner[nnz] = other;
           value[nnz++] = -t;
         } else {
           // Ghost fluid: p_front at f of the way across the front voxel; half a voxel of this one's
@@ -761,12 +763,13 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
           const double t = area / resistance;
           diagonal += t;
           b[std::size_t(row)] += t * frontPressure(m);
-          links.push_back({c, m, t});
+          links.push_back({c, m, t, own, cell});
         }
       }
       value[diagonalAt] = diagonal;
       A.diagonal[std::size_t(row)] = diagonalAt;
-      if (filledSourcePore > 0 && std::binary_search(source_.begin(), source_.end(), c))
+      if (filledSourcePore > 0 && c >= source_.front() && c <= source_.back() &&
+          std::binary_search(source_.begin(), source_.end(), c))
         b[std::size_t(row)] += flowRate * poreVolume(c) / filledSourcePore;
     }
     A.rowStart[std::size_t(unknowns)] = nnz;
@@ -829,7 +832,8 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
       }
     }
     for (const Link& l : links) {
-      const VoxelBricks::Cell from = bricks_.find(l.from), to = bricks_.find(l.to);
+      const VoxelBricks::Cell& from = l.fromCell;
+      const VoxelBricks::Cell& to = l.toCell;
       const double q = std::max(0.0, l.t * (from->pressure - frontPressure(l.to)));
       const std::ptrdiff_t d = std::ptrdiff_t(l.to) - std::ptrdiff_t(l.from);
       for (int a = 0; a < 3; ++a)
@@ -880,7 +884,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   std::vector<std::pair<std::size_t, double>> inflow; // front voxel, m^3/s
   inflow.reserve(links.size());
   for (const Link& l : links) {
-    const VoxelBricks::Cell from = bricks_.find(l.from);
+    const VoxelBricks::Cell& from = l.fromCell;
     const double q = std::max(0.0, l.t * (from->pressure - frontPressure(l.to)));
     inflow.push_back({l.to, q});
   }
