@@ -367,6 +367,25 @@ TEST_F(InputFuzz, FailedWriteLeavesNoPartialFileAndStaleOutputsGo) {
   }
 }
 
+// The same limit with one snapshot, at the end: the label maps (a few kB, under the limit) are written before the
+// simulated CT, which the limit stops. A failed run takes every file it wrote with it, the small ones included: the
+// folder holds none (cement_labels.nrrd was left behind before fileOfThisRun; the corpus of issue 21, session 6).
+TEST_F(InputFuzz, AWriteThatFailsLateTakesTheRunsEarlierFilesWithIt) {
+  const fs::path out = dir_ / "inject-late";
+  const std::string command = "ulimit -f 8; exec timeout -k 5 60 '" + kProgram + "' inject --ct '" +
+                              (kData / "foam-phantom" / "pre.nrrd").string() + "' --scene '" +
+                              (kData / "scenes" / "paper-1ml.json").string() +
+                              "' --tip-mm 22.325,21.855,21.75 --volume-ml 0.05 --snapshot-interval-s 1e6 --quiet "
+                              "--no-pictures --out '" + out.string() + "'";
+  const ProgramRun r = cementsph::testing::runProgram("bash", {"-c", command});
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("file size limit"), std::string::npos) << r.err;
+  if (fs::exists(out)) {
+    for (const auto& e : fs::directory_iterator(out)) ADD_FAILURE() << e.path().filename() << " was left behind";
+  }
+}
+
 } // namespace
 
 // Issue 21: every header field that carries a number, in each text format, set in turn to each hostile

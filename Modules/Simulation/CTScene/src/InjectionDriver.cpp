@@ -383,10 +383,10 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
     throw sph::SimulationError("inject: the run's figure " + bad + " is not a finite number (the run went wrong; "
                                "try a smaller flow rate or particle radius, or report the scene)");
   result.metrics["simulated_ct_grid"] = o.cropToRegion ? "region" : "input";
-  if (result.cementLabelsFile)
-    imaging::writeMask(result.cementLabelsFile, (std::filesystem::path(o.outDir) / "cement_labels.nrrd").string());
+  // The label maps are this run's files too: a later write that fails takes them with it.
+  if (result.cementLabelsFile) imaging::writeMask(result.cementLabelsFile, writer.fileOfThisRun("cement_labels.nrrd"));
   if (result.anatomyLabelsFile)
-    imaging::writeMask(result.anatomyLabelsFile, (std::filesystem::path(o.outDir) / "anatomy_labels.nrrd").string());
+    imaging::writeMask(result.anatomyLabelsFile, writer.fileOfThisRun("anatomy_labels.nrrd"));
   // For 3D Slicer (SlicerFiles.h): the tip and trajectory, the leak sites, the label maps' colours.
   std::vector<std::pair<std::string, std::string>> slicerFiles{
       {"injection.mrk.json", injectionMarkups(*scene.tipMm, scene.direction, scene.cannulaLengthMm).dump(2) + "\n"},

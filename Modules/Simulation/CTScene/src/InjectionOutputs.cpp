@@ -61,6 +61,12 @@ InjectionWriter::~InjectionWriter() {
   }
 }
 
+std::string InjectionWriter::fileOfThisRun(const std::string& name) {
+  std::string path = (fs::path(outDir_) / name).string();
+  written_.push_back(path);
+  return path;
+}
+
 void InjectionWriter::ctFrame(double time, const std::string& ctName, const std::string& particlesName,
                               const imaging::ImageType* now) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -149,11 +155,10 @@ void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging:
   snapshot(time, particles, simulatedCt);
   waitForQueuedWrites(); // the series is whole before particles.pvd names it
   stopWriting();
-  const fs::path out(outDir_);
-  imaging::writeTextAtomically((out / "particles.pvd").string(), particleCollection(snapshots_));
-  imaging::writeTextAtomically((out / "tip_pressure.csv").string(), tipPressureCsv(tipSeries, baselinePa));
-  imaging::writeVolume(simulatedCtFile, (out / "simulated_ct.nrrd").string());
-  imaging::writeTextAtomically((out / "scene.json").string(), toJson(scene_).dump(2) + "\n");
+  imaging::writeTextAtomically(fileOfThisRun("particles.pvd"), particleCollection(snapshots_));
+  imaging::writeTextAtomically(fileOfThisRun("tip_pressure.csv"), tipPressureCsv(tipSeries, baselinePa));
+  imaging::writeVolume(simulatedCtFile, fileOfThisRun("simulated_ct.nrrd"));
+  imaging::writeTextAtomically(fileOfThisRun("scene.json"), toJson(scene_).dump(2) + "\n");
   metrics["snapshots"] = snapshots_.size();
   if (ctSnapshots_) {
     metrics["simulated_ct_snapshots"] = ctFrames_.size();
@@ -164,10 +169,10 @@ void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging:
                         {"note", "frame 0 (t = 0 s, no cement) is the background of an X-ray sequence; the frames "
                                  "cover the region of interest; the last frame is the final state, which "
                                  "simulated_ct.nrrd holds on the input CT's grid"}};
-    imaging::writeTextAtomically((out / "sequence.json").string(), sequence.dump(2) + "\n");
+    imaging::writeTextAtomically(fileOfThisRun("sequence.json"), sequence.dump(2) + "\n");
   }
-  for (const auto& [name, text] : textFiles) imaging::writeTextAtomically((out / name).string(), text);
-  imaging::writeTextAtomically((out / "metrics.json").string(), metrics.dump(2) + "\n");
+  for (const auto& [name, text] : textFiles) imaging::writeTextAtomically(fileOfThisRun(name), text);
+  imaging::writeTextAtomically(fileOfThisRun("metrics.json"), metrics.dump(2) + "\n");
   finished_ = true;
 }
 

@@ -56,6 +56,10 @@ public:
   InjectionWriter& operator=(const InjectionWriter&) = delete;
 
   bool writing() const { return !outDir_.empty(); }
+  // The path of `name` in the output folder, taken as one of this run's files: if the run fails before finish()
+  // ends, the destructor removes it with the snapshots, so a failed run leaves no mix of its files and an earlier
+  // run's (README "Bad input", Outputs). Call it before the file is written.
+  std::string fileOfThisRun(const std::string& name);
   // particles_NNNN.vtp (and simulated_ct_NNNN.nrrd: `ctNow` if given, else made) at time [s].
   void snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow = nullptr);
   // The last snapshot (the final state), particles.pvd, tip_pressure.csv, simulated_ct.nrrd, scene.json,
@@ -95,7 +99,7 @@ private:
   nlohmann::json ctFrames_ = nlohmann::json::array();
   double ctSnapshotWallS_ = 0.0;
   std::vector<std::pair<double, std::string>> snapshots_;
-  std::vector<std::string> written_; // this run's snapshot files
+  std::vector<std::string> written_; // this run's files (snapshots, fileOfThisRun), removed if it fails
   bool finished_ = false;
 };
 
