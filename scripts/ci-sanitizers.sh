@@ -260,9 +260,13 @@ if [ "$unit_label" = 1 ]; then
   step=$SECONDS
   # The Python tests are left out: the interpreter is not instrumented, and an ASan extension module loads only with
   # libasan preloaded into python3 (whose own allocations LSan would then report); they run in the Release tree.
+  # So is RenderBackendRegression.XFallbackRendersBaseline: its child process renders through Xvfb and Mesa's GLX
+  # driver, which is unloaded before exit, so LeakSanitizer reports that driver's blocks from "<unknown module>" (no
+  # library name a suppression could match; first CI run of the whole suite, 2026-12-03). The other render tests
+  # (OSMesa, EGL) run here.
   exclude_args=()
   if [ -n "$exclude_regex" ]; then exclude_args=(-LE "^($exclude_regex)\$"); fi
-  if ctest --test-dir "$cmake_out" -L "^($label_regex)\$" "${exclude_args[@]}" -E '^Python\.' -j"$jobs" --timeout 900 \
+  if ctest --test-dir "$cmake_out" -L "^($label_regex)\$" "${exclude_args[@]}" -E '^Python\.|^RenderBackendRegression\.XFallbackRendersBaseline$' -j"$jobs" --timeout 900 \
        --output-on-failure > "$work/ctest.log" 2>&1; then
     echo "labels $suite_labels (GCC build): passed, $(grep -o 'tests failed out of [0-9]*' "$work/ctest.log" | grep -o '[0-9]*$') tests"
   else

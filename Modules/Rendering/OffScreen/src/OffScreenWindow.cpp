@@ -208,6 +208,13 @@ void writeWindowPng(vtkRenderWindow* window, const std::filesystem::path& png) {
 
 void writeImagePng(vtkImageData* image, const std::filesystem::path& png) {
   // Write next to the target and rename: readers never see a half-written PNG, and a failure leaves none.
+  // A folder that is not there is said before VTK's PNG writer runs: VTK 9.1's writer, failing to open its file,
+  // returns without freeing the libpng structures it made (LeakSanitizer, XrayFramesPicture.BadInput...).
+  const std::filesystem::path folder = png.has_parent_path() ? png.parent_path() : std::filesystem::path(".");
+  std::error_code folderError;
+  if (!std::filesystem::is_directory(folder, folderError))
+    throw std::runtime_error("cementsph rendering: could not write " + png.string() + ": the folder " +
+                             folder.string() + " does not exist");
   const std::filesystem::path tmp = temporarySibling(png);
   auto writer = vtkSmartPointer<vtkPNGWriter>::New();
   writer->SetFileName(tmp.string().c_str());

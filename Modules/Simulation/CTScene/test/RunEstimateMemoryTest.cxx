@@ -30,6 +30,11 @@ long statusKb(const std::string& field) {
 }
 
 TEST(RunEstimateMemory, TheVoxelModelsEstimateIsWithinOneAndAHalfOfTheMeasuredPeak) {
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer's shadow memory, redzones and quarantine make the process's peak 2-3x what the run itself needs
+  // (273.7 MB measured against 102 MB estimated in CI's ASan tree): the oracle holds for a plain build only.
+  GTEST_SKIP() << "the measured peak of an AddressSanitizer build is not the run's memory";
+#endif
   // A uniform trabecular CT (200 HU) of 120^3 voxels of 0.5 mm; the scene's 40 mm region is 80^3 = 512 000
   // voxels, 0.3 ml of cement: a run whose arrays dwarf the cement's own.
   const auto ct = cementsph::scene::testing::cube(120, 0.5, 200.f);
