@@ -49,7 +49,7 @@ unit_label="${SANITIZE_UNIT_LABEL:-0}"
 # Step 3's labels (SANITIZE_LABELS, default "unit"; .ci/run: "unit validation render", the whole suite) less the
 # suites carrying one of SANITIZE_EXCLUDE_LABELS (default "slow": minutes each at Release speed, far more here).
 suite_labels="${SANITIZE_LABELS:-unit}"
-exclude_labels="${SANITIZE_EXCLUDE_LABELS:-slow}"
+exclude_labels="${SANITIZE_EXCLUDE_LABELS-slow}" # set and empty: nothing excluded
 label_regex="$(echo "$suite_labels" | sed 's/ \+/|/g')"
 exclude_regex="$(echo "$exclude_labels" | sed 's/ \+/|/g')"
 seconds="${FUZZ_SECONDS:-30}"

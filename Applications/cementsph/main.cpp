@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <mutex>
 #include <streambuf>
 #include <stdexcept>
 
@@ -303,16 +304,22 @@ public:
   explicit HoldWarnings(std::streambuf* real) : real_(real) {}
   // The held warnings, and any unfinished line.
   void release() {
+    const std::lock_guard<std::mutex> lock(mutex_);
     endLine();
     real_->sputn(held_.data(), std::streamsize(held_.size()));
     held_.clear();
     real_->pubsync();
   }
-  void drop() { held_.clear(), line_.clear(); }
+  void drop() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    held_.clear(), line_.clear();
+  }
 
 protected:
   int overflow(int c) override {
     if (c == traits_type::eof()) return traits_type::not_eof(c);
+    // std::cerr may be written from another thread (a library's warning on the snapshot writer's thread).
+    const std::lock_guard<std::mutex> lock(mutex_);
     line_.push_back(char(c));
     if (c == '\n' || c == '\r') endLine();
     return c;
@@ -326,6 +333,7 @@ private:
     line_.clear();
   }
   std::streambuf* real_;
+  std::mutex mutex_;
   std::string line_, held_;
 };
 

@@ -175,6 +175,9 @@ double PressureSolver::preconditionPadded(const double* r, double* z, int n) con
 
 PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                              double tolerance, int maxIterations) {
+  if (b.size() != A.rows())
+    throw std::invalid_argument("voxel Darcy: the pressure system has " + std::to_string(A.rows()) +
+                                " rows but its right-hand side " + std::to_string(b.size()) + " values");
   if (x.size() != A.rows()) x = Eigen::VectorXd::Zero(A.rows());
   return solve(A, b.data(), x.data(), tolerance, maxIterations);
 }

@@ -81,8 +81,8 @@ inline void expectParticlesAgreeWithTheVoxelModel(double volumeMl) {
   const ModelRun sph = run(ct, "particle-darcy", volumeMl, radiusMm);
   ASSERT_TRUE(voxel.result.cementLabels && sph.result.cementLabels);
   const double d = dice(voxel.result.cementLabels, sph.result.cementLabels);
-  const double sv = voxel.result.metrics["mean_spreading_distance_mm"].get<double>();
-  const double sp = sph.result.metrics["mean_spreading_distance_mm"].get<double>();
+  const double sv = voxel.result.metrics.at("mean_spreading_distance_mm").get<double>();
+  const double sp = sph.result.metrics.at("mean_spreading_distance_mm").get<double>();
   std::printf("phantom %.2f ml, d = %.3f mm: Dice %.4f, spreading %.4f / %.4f mm (%+.3f), tip %.1f / %.1f Pa (%.4fx), "
               "wall %.1f / %.1f s, CPU %.2f / %.2f s (%.1fx), %s steps\n",
               volumeMl, 2 * radiusMm, d, sp, sv, sp - sv, sph.tipPa, voxel.tipPa, sph.tipPa / voxel.tipPa, sph.wallS,

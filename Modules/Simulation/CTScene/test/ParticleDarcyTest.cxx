@@ -138,12 +138,12 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
   const double noise = medianRelativeChange(r.result.tipSeries, 0.25 * V / Q);
   std::printf("uniform: spreading %.4f mm against 3R/4 %.4f mm; tip %.1f Pa against %.1f Pa (r0 %.4f mm, engine %.4f); "
               "noise %.4f; %zu steps, wall %.1f s, particles %s\n",
-              m["mean_spreading_distance_mm"].get<double>(), 0.75 * R * 1e3, m["final_tip_pressure_pa"].get<double>(), tip,
-              r0 * 1e3, m["outlet_effective_radius_mm"].get<double>(), noise, std::size_t(m["steps"]), r.wallS,
+              m.at("mean_spreading_distance_mm").get<double>(), 0.75 * R * 1e3, m.at("final_tip_pressure_pa").get<double>(), tip,
+              r0 * 1e3, m.at("outlet_effective_radius_mm").get<double>(), noise, std::size_t(m.at("steps")), r.wallS,
               m.at("fluid_particles").dump().c_str());
   std::printf("solver: %s iterations mean, worst residual %s, solve %s s, geometry %s s, front %s\n",
-              m["pressure_solver_iterations_mean"].dump().c_str(), m["pressure_solver_worst_residual"].dump().c_str(),
-              m["pressure_solve_wall_s"].dump().c_str(), m["geometry_wall_s"].dump().c_str(), m["front_particles"].dump().c_str());
+              m.at("pressure_solver_iterations_mean").dump().c_str(), m.at("pressure_solver_worst_residual").dump().c_str(),
+              m.at("pressure_solve_wall_s").dump().c_str(), m.at("geometry_wall_s").dump().c_str(), m.at("front_particles").dump().c_str());
   {
     auto* pts = r.result.particles.GetPointer();
     auto* pa = pts->GetPointData()->GetArray("pressure_pa");
