@@ -15,6 +15,7 @@
 //    voxels, and the simulated CT's rods unchanged), the volume at every snapshot.
 // The uniform case also runs voxel-darcy for the record (its figures and the wall-time ratio, printed).
 #include "cementsph/scene/InjectionRunner.h"
+#include "../src/Models/ParticleDarcy/ParticleDarcyStepping.h"
 #include "ScaffoldCT.h"
 
 #include <gtest/gtest.h>
@@ -173,6 +174,13 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
   EXPECT_NEAR(m["mean_spreading_distance_mm"].get<double>() / (0.75 * R * 1e3), 1.0, 0.02);
   EXPECT_NEAR(m["final_tip_pressure_pa"].get<double>() / tip, 1.0, 0.10);
   EXPECT_LT(noise, 0.05);
+  // Multi-rate stepping runs here: the outlet's particles are (R / a)^2 ~ 6x faster than the front's, so the
+  // fastest 5 % move more than 0.2 d in the bulk's macro step and must be sub-stepped; and the macro step bounds
+  // their sub-steps (none clamped).
+  std::printf("sub-steps %s, clamped %s, sub-step moves capped %s\n", m.at("sub_steps").dump().c_str(),
+              m.at("sub_steps_clamped").dump().c_str(), m.at("sub_step_moves_capped").dump().c_str());
+  EXPECT_GT(m.at("sub_steps").get<std::size_t>(), 0u);
+  EXPECT_EQ(m.at("sub_steps_clamped").get<std::size_t>(), 0u);
   for (const auto& h : m["volume_history"]) {
     const double injected = h["volume_injected_ml"].get<double>(), held = h["cement_volume_ml"].get<double>();
     EXPECT_NEAR(held, injected, 0.01 * injected) << "at " << h["time_s"] << " s";
@@ -418,4 +426,46 @@ TEST(ParticleDarcy, AutoPicksParticlesWhereTheyResolveThePores) {
   const InjectionRunResult narrow = runInjection(cementsph::scene::testing::scaffold(), sceneFromJson(j), {});
   EXPECT_EQ(narrow.metrics["pressure_model"], "voxel-darcy") << narrow.metrics["model_reason"];
   EXPECT_LT(chord(10) / 1.14, 8.0);
+}
+
+// The stepping rules (ParticleDarcyStepping.h), each against a number worked out here.
+// A one-voxel wall (voxels of 1 mm, voxel 1 closed: x in [0.5, 1.5)) with open space on both sides: a step of
+// 1.6 mm from x = 0.2 ends at 1.8 (open) but crosses the wall, so it is dropped (x stays 0.2); a step of 0.25 mm
+// toward the wall is taken (0.45, open); along y, where nothing is closed, a 3.3 mm step is taken whole.
+TEST(ParticleDarcyStepping, AStepNeverCrossesAOneVoxelWall) {
+  const auto closedAt = [](const Eigen::Vector3d& p) { return std::floor(p.x() + 0.5) == 1.0; };
+  const Eigen::Vector3d spacing(1.0, 1.0, 1.0);
+  Eigen::Vector3d pos(0.2, 0.0, 0.0);
+  cementsph::scene::particle_darcy::stepAround(pos, Eigen::Vector3d(1.6, 3.3, 0.0), spacing, closedAt);
+  EXPECT_DOUBLE_EQ(pos.x(), 0.2);
+  EXPECT_DOUBLE_EQ(pos.y(), 3.3);
+  cementsph::scene::particle_darcy::stepAround(pos, Eigen::Vector3d(0.25, 0.0, 0.0), spacing, closedAt);
+  EXPECT_DOUBLE_EQ(pos.x(), 0.45);
+}
+
+// A particle that is not sub-stepped (Darcy move 0.1 <= limit 0.2) with a density correction of 10 a step: its
+// move is its Darcy move plus the correction capped at the limit plus its shift, |(0.1 + 0.2, 0.05, 0)|.
+TEST(ParticleDarcyStepping, TheDensityCorrectionIsCappedForEveryParticle) {
+  using cementsph::scene::particle_darcy::macroMove;
+  const Eigen::Vector3d darcy(0.1, 0, 0), u(10.1, 0, 0), shift(0, 0.05, 0);
+  const Eigen::Vector3d plain = macroMove(u, darcy, shift, 1.0, false, 0.2);
+  EXPECT_NEAR(plain.norm(), std::hypot(0.3, 0.05), 1e-12);
+  const Eigen::Vector3d sub = macroMove(u, darcy, shift, 1.0, true, 0.2); // sub-stepped: the correction and shift only
+  EXPECT_NEAR(sub.norm(), std::hypot(0.2, 0.05), 1e-12);
+}
+
+// The fastest particle's Darcy speed 1 with a correction against it (|u| = 0.3), 99 slow particles (|u| 0.01):
+// the macro step may take it at most 4 sub-steps of the limit 0.2 by its Darcy speed, dt <= 4 x 0.2 / 1 = 0.8
+// (the bulk's 0.2 / 0.01 = 20 and the growth bound 100 do not bind); with the clipped whole speed (0.3) as the
+// bound it was 2.67, 13 sub-steps' worth, clamped to 4 and silently short.
+TEST(ParticleDarcyStepping, TheMacroStepBoundsTheFastestDarcyMoveBySubSteps) {
+  std::vector<double> speeds(100, 0.01);
+  speeds[0] = 0.3;
+  cementsph::scene::particle_darcy::MacroStepRule rule;
+  rule.limit = 0.2;
+  const double dt = cementsph::scene::particle_darcy::macroStep(speeds, 1.0, 1e9, 100.0, rule);
+  EXPECT_NEAR(dt, 0.8, 1e-12);
+  // Without a correction against the flow the rule is unchanged: the fastest whole speed 0.5 (Darcy 0.4) sets it.
+  speeds[0] = 0.5;
+  EXPECT_NEAR(cementsph::scene::particle_darcy::macroStep(speeds, 0.4, 1e9, 100.0, rule), 4 * 0.2 / 0.5, 1e-12);
 }

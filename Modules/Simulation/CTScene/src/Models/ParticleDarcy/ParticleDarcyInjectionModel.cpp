@@ -96,6 +96,7 @@
 // (Ihmsen et al. 2014), SPHinXsys's free-surface indicator (Zhang et al.), porous-media ISPH (Shao 2010).
 #include "cementsph/scene/InjectionModel.h"
 #include "../PointArrays.h"
+#include "ParticleDarcyStepping.h"
 
 #include "cementsph/rheology/Rheology.h"
 #include "cementsph/rheology/TubeFlow.h"
@@ -311,7 +312,7 @@ public:
     double vmax = 0, vmaxDarcy = 0;
     for (std::size_t i = 0; i < u_.size(); ++i) vmax = std::max(vmax, u_[i].norm()), vmaxDarcy = std::max(vmaxDarcy, speed_[i]);
     vmax = std::min(vmax, kMaxCorrectionOverDarcy * vmaxDarcy);
-    const double dt = macroStep(dtMax, vmax);
+    const double dt = macroStep(dtMax, vmaxDarcy);
     moveMultiRate(dt);
     lastDt_ = dt;
     ++steps_;
@@ -432,6 +433,8 @@ public:
     e["particle_volume_mm3"] = volume_ * 1e9;
     e["front_particles"] = frontParticles_;
     e["sub_steps"] = subSteps_; // the fast particles' sub-steps, summed over the macro steps (moveMultiRate)
+    e["sub_steps_clamped"] = subStepsClamped_; // macro steps whose fastest particle needed more than kMaxSubSteps
+    e["sub_step_moves_capped"] = cappedSubStepMoves_; // particle sub-steps cut to 0.2 d (fell behind the field)
     e["pairs_hidden_behind_solid_per_step"] = steps_ ? double(hiddenPairs_) / double(steps_) : 0.0;
     e["geometry_wall_s"] = geometrySeconds_;
     e["cannula_shaft_voxels_closed"] = shaftVoxels_;
@@ -1059,21 +1062,16 @@ private:
       }
       const double sn = shift.norm();
       if (sn > kMaxShiftOverD * d_) shift *= kMaxShiftOverD * d_ / sn;
-      // A sub-stepped particle takes its density correction here, once (a packing fix about its start, at most
-      // 0.2 d), and its Darcy velocity in the sub-steps (moveMultiRate).
-      Eigen::Vector3d correction = (u_[i] - darcy_[i]) * dt;
-      if (const double c = correction.norm(); c > kMaxMoveOverD * d_) correction *= kMaxMoveOverD * d_ / c;
-      stepAround(x_[i], subStepped[i] ? Eigen::Vector3d(correction + shift) : Eigen::Vector3d(u_[i] * dt + shift));
+      // The density correction (a packing fix about the start, at most 0.2 d) for every particle; a sub-stepped
+      // one takes its Darcy velocity in the sub-steps (moveMultiRate), the others here (particle_darcy::macroMove).
+      stepAround(x_[i], particle_darcy::macroMove(u_[i], darcy_[i], shift, dt, subStepped[i] != 0, kMaxMoveOverD * d_));
     }
   }
 
-  // A move that never enters a closed voxel: taken axis by axis, a component that would cross into one dropped.
+  // A move that never enters or crosses a closed voxel (particle_darcy::stepAround: axis by axis, every voxel on
+  // the way tested).
   void stepAround(Eigen::Vector3d& pos, const Eigen::Vector3d& step) const {
-    for (int a = 0; a < 3; ++a) {
-      Eigen::Vector3d trial = pos;
-      trial[a] += step[a];
-      if (!closedAt(trial)) pos = trial;
-    }
+    particle_darcy::stepAround(pos, step, solid_->grid.spacing, [this](const Eigen::Vector3d& q) { return closedAt(q); });
   }
 
   // Multi-rate stepping (issue 19's speed): the Darcy pressure is quasi-static (no inertia: it changes only as
@@ -1084,18 +1082,14 @@ private:
   // particle takes at most kMaxSubSteps sub-steps; never shorter than the single-rate step 0.2 d / vmax.
   // Before it, the step was the single-rate one, set by the particles leaving the outlet: one step per ~4
   // inserted particles, so the steps grew as the particle count.
-  double macroStep(double dtMax, double vmax) const {
-    if (!(vmax > 0)) return dtMax;
-    const double limit = kMaxMoveOverD * d_;
+  // The rule itself: particle_darcy::macroStep (the sub-step bound by the fastest Darcy speed).
+  double macroStep(double dtMax, double vmaxDarcy) const {
     std::vector<double> speeds(u_.size());
-    for (std::size_t i = 0; i < u_.size(); ++i) speeds[i] = std::min(u_[i].norm(), vmax);
-    const std::size_t rank = std::size_t(std::floor((1.0 - kSubSteppedShare) * double(speeds.size() - 1)));
-    std::nth_element(speeds.begin(), speeds.begin() + std::ptrdiff_t(rank), speeds.end());
-    const double bulk = speeds[rank];
-    double dt = bulk > 0 ? limit / bulk : dtMax;
-    dt = std::min(dt, kMaxGrowth * double(x_.size()) * volume_ / flowRate_);
-    dt = std::min(dt, kMaxSubSteps * limit / vmax);
-    return std::min(dtMax, std::max(dt, limit / vmax));
+    for (std::size_t i = 0; i < u_.size(); ++i) speeds[i] = u_[i].norm();
+    particle_darcy::MacroStepRule rule;
+    rule.limit = kMaxMoveOverD * d_, rule.subSteppedShare = kSubSteppedShare;
+    rule.maxCorrectionOverDarcy = kMaxCorrectionOverDarcy, rule.maxSubSteps = kMaxSubSteps;
+    return particle_darcy::macroStep(std::move(speeds), vmaxDarcy, dtMax, kMaxGrowth * double(x_.size()) * volume_ / flowRate_, rule);
   }
 
   // The frozen field of the macro step: the Shepard interpolant sum_j Omega_j W v_j / sum_j Omega_j W over the
@@ -1177,14 +1171,20 @@ private:
       insert();
       return;
     }
-    const int m = std::clamp(int(std::ceil(vmax * dt / limit - 1e-9)), 1, kMaxSubSteps);
+    // The macro step bounds the sub-steps by the fastest Darcy speed (particle_darcy::macroStep), so the clamp
+    // should never act: counted (sub_steps_clamped) rather than silent.
+    const int needed = std::max(1, int(std::ceil(vmax * dt / limit - 1e-9)));
+    if (needed > kMaxSubSteps) ++subStepsClamped_;
+    const int m = std::min(needed, kMaxSubSteps);
     subSteps_ += std::size_t(m);
     for (int k = 1; k <= m; ++k) {
       const double delta = dt / m;
       for (std::size_t f = 0; f < fast.size(); ++f) {
         Eigen::Vector3d v = frozenVelocity(x_[fast[f]]);
         const double length = v.norm() * delta;
-        if (length > limit) v *= limit / length; // a sub-step never moves a particle more than 0.2 d
+        // A sub-step never moves a particle more than 0.2 d: where the frozen field along its path is faster than
+        // its start (toward a throat), it falls behind by the rest; counted (sub_step_moves_capped).
+        if (length > limit) v *= limit / length, ++cappedSubStepMoves_;
         stepAround(x_[fast[f]], v * delta);
       }
       time_ = start + dt * k / m;
@@ -1259,7 +1259,7 @@ private:
   std::vector<StencilEntry> stencil_;
   int pad_ = 0, padSize_[3] = {1, 1, 1};
   std::vector<std::size_t> touched_;
-  std::size_t shaftVoxels_ = 0, steps_ = 0, subSteps_ = 0, frontParticles_ = 0;
+  std::size_t shaftVoxels_ = 0, steps_ = 0, subSteps_ = 0, frontParticles_ = 0, subStepsClamped_ = 0, cappedSubStepMoves_ = 0;
   std::vector<Eigen::Vector3d> seeds_, candidates_;
   int cells_[3] = {1, 1, 1};
   std::vector<int> cellStart_, cellItems_;
