@@ -197,6 +197,19 @@ void edgeWarnings(const imaging::ImageType& ct, const PorousSolid& solid, const 
                          "(a larger roi_size_mm)");
 }
 
+// True when `region` lies on exactly the input's grid: an axial input (nothing resampled or reoriented, so the
+// region's HU are the input's own), the same voxels, origin, spacing and direction.
+bool isInputGrid(const imaging::ImageType* input, const imaging::ImageType* region) {
+  if (!isAxisAligned(input) || input->GetLargestPossibleRegion() != region->GetLargestPossibleRegion() ||
+      input->GetDirection() != region->GetDirection())
+    return false;
+  for (unsigned a = 0; a < 3; ++a) {
+    const double h = input->GetSpacing()[a];
+    if (region->GetSpacing()[a] != h || std::abs(region->GetOrigin()[a] - input->GetOrigin()[a]) > 1e-6 * h) return false;
+  }
+  return true;
+}
+
 // The path of the first number in j that is NaN or infinite ("" if none).
 std::string firstNonFinite(const nlohmann::json& j, const std::string& path = "") {
   if (j.is_number_float()) return std::isfinite(j.get<double>()) ? "" : path;
@@ -273,7 +286,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   if (o.progress)
     for (const std::string& w : unreadKeys) std::cerr << "inject: warning: " << w << "\n";
 
-  const std::unique_ptr<InjectionModel> model = entry.make();
+  std::unique_ptr<InjectionModel> model = entry.make();
   model->start(setup);
   if (o.checkOnly) return InjectionResult{};
 
@@ -344,32 +357,39 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   summarisePressures(result.tipSeries, s);
   s.volumeHistory.push_back(volumeRecord()); // the final state
   model->report(s, result.engineFigures);
-  {
-    // kg/m^3 per region voxel at the end: 8 bytes a region voxel, freed before the region-sized images below
-    // are made (with them it was the run's peak memory on a whole-scan region, issue 23).
-    const std::vector<double> finalDensity = model->cementDensity();
-    edgeWarnings(*ct, solid, finalDensity, s);
-    result.simulatedCt = simulatedCtOnRoi(ct, solid, finalDensity, hu, rho0);
-  }
+  // What the files need from the engine, taken before the engine goes: its state (the voxel model's medium,
+  // 12 bytes a region voxel) is then freed before the region-sized images are made, which were the run's peak
+  // memory on a whole-scan region (issue 23).
+  // kg/m^3 per region voxel at the end: 8 bytes a region voxel, freed once the simulated CT is made from it.
+  std::vector<double> finalDensity = model->cementDensity();
+  edgeWarnings(*ct, solid, finalDensity, s);
   for (std::size_t w = unreadKeys.size(); w < s.warnings.size(); ++w) std::cerr << "inject: warning: " << s.warnings[w] << "\n";
-
   result.particles = model->cement();
   s.cementPoints = std::size_t(result.particles->GetNumberOfPoints());
+  std::vector<std::uint8_t> cementLabels = model->cementLabels();
+  imaging::MaskType::Pointer anatomyOnRegion; // the anatomy the leakage was judged by
+  if (const anatomy::Anatomy* used = model->anatomyUsed(); used && writer.writing()) anatomyOnRegion = anatomyMap(*used);
+  const double finalTime = model->time();
+  const std::optional<double> baselinePa = model->pressureBaselinePa();
+  model.reset();
+  result.simulatedCt = simulatedCtOnRoi(ct, solid, finalDensity, hu, rho0);
+  std::vector<double>().swap(finalDensity);
   result.regionCt = simulatedCtOnRoi(ct, solid, {}, hu, rho0);
-  if (const std::vector<std::uint8_t> cementLabels = model->cementLabels(); !cementLabels.empty())
-    result.cementLabels = labelMapOn(result.simulatedCt, cementLabels);
+  if (!cementLabels.empty()) result.cementLabels = labelMapOn(result.simulatedCt, cementLabels);
+  std::vector<std::uint8_t>().swap(cementLabels);
   // The files on the input's own grid unless a crop was asked for (only when files are written: a copy of the
   // whole scan is what a study or a plan does not need).
   if (writer.writing()) {
     result.simulatedCtFile = result.simulatedCt;
     result.cementLabelsFile = result.cementLabels;
-    if (!o.cropToRegion) {
+    // A region that is the input's whole grid (a whole-scan region on an axial CT) is the file as it is: the
+    // paste would copy it voxel for voxel (issue 23: a third copy of the scan at the run's peak).
+    if (!o.cropToRegion && !isInputGrid(input, result.simulatedCt)) {
       result.simulatedCtFile = pasteOntoInputGrid(input, result.simulatedCt, result.regionCt);
       if (result.cementLabels) result.cementLabelsFile = labelsOnInputGrid(input, result.cementLabels);
     }
-    // The anatomy the leakage was judged by, on the same grid as the simulated CT's file.
-    if (const anatomy::Anatomy* used = model->anatomyUsed())
-      result.anatomyLabelsFile = labelsOnInputGrid(result.simulatedCtFile, anatomyMap(*used));
+    // The anatomy on the same grid as the simulated CT's file.
+    if (anatomyOnRegion) result.anatomyLabelsFile = labelsOnInputGrid(result.simulatedCtFile, anatomyOnRegion);
   }
   result.metrics = s.toJson();
   result.metrics["provenance"] = provenance::toJson();
@@ -393,8 +413,8 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
       {"leak_sites.mrk.json", leakSiteMarkups(s.leakageSites).dump(2) + "\n"},
       {"cement_labels.ctbl", cementLabelColourTable()}};
   if (result.anatomyLabelsFile) slicerFiles.emplace_back("anatomy_labels.ctbl", anatomyLabelColourTable());
-  writer.finish(model->time(), result.particles, result.simulatedCt, result.simulatedCtFile, result.tipSeries,
-                model->pressureBaselinePa(), result.metrics, slicerFiles);
+  writer.finish(finalTime, result.particles, result.simulatedCt, result.simulatedCtFile, result.tipSeries, baselinePa,
+                result.metrics, slicerFiles);
   return result;
 }
 

@@ -1,5 +1,6 @@
 #include "cementsph/scene/SimulatedCT.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace cementsph::scene {
@@ -22,17 +23,35 @@ imaging::ImageType::Pointer simulatedCtOnRoi(const imaging::ImageType* ct, const
   for (unsigned a = 0; a < 3; ++a) origin[a] = solid.grid.origin[int(a)] * 1e3;
   simCt->SetOrigin(origin);
   simCt->Allocate();
+  for (int a = 0; a < 3; ++a)
+    if (long(solid.grid.size[std::size_t(a)]) != long(solid.roiSize[std::size_t(a)]))
+      throw std::invalid_argument("simulatedCtOnRoi: the region's grid and size differ");
+  // Row by row through the buffers (issue 23: GetPixel and SetPixel per voxel were most of this pass on a
+  // whole-scan region). The region lies inside the CT (PorousSolid clips it); ComputeOffset checks nothing, so
+  // the rows' ends are checked here once.
   const auto start = ct->GetLargestPossibleRegion().GetIndex();
+  const float* in = ct->GetBufferPointer();
+  float* out = simCt->GetBufferPointer();
+  const long nx = solid.grid.size[0];
   for (int k = 0; k < solid.grid.size[2]; ++k)
-    for (int j = 0; j < solid.grid.size[1]; ++j)
-      for (int i = 0; i < solid.grid.size[0]; ++i) {
-        imaging::ImageType::IndexType src;
-        src[0] = start[0] + solid.roiStart[0] + i;
-        src[1] = start[1] + solid.roiStart[1] + j;
-        src[2] = start[2] + solid.roiStart[2] + k;
-        const double added = rho.empty() ? 0.0 : huPerRelativeDensity * rho[solid.grid.index(i, j, k)] / rho0;
-        simCt->SetPixel({{i, j, k}}, float(double(ct->GetPixel(src)) + added));
+    for (int j = 0; j < solid.grid.size[1]; ++j) {
+      imaging::ImageType::IndexType first, last;
+      first[0] = start[0] + solid.roiStart[0];
+      first[1] = start[1] + solid.roiStart[1] + j;
+      first[2] = start[2] + solid.roiStart[2] + k;
+      last = first;
+      last[0] += nx - 1;
+      if (!ct->GetBufferedRegion().IsInside(first) || !ct->GetBufferedRegion().IsInside(last))
+        throw std::invalid_argument("simulatedCtOnRoi: the region leaves the CT's buffer");
+      const float* from = in + ct->ComputeOffset(first);
+      float* to = out + solid.grid.index(0, j, k);
+      if (rho.empty()) {
+        std::copy(from, from + nx, to);
+        continue;
       }
+      const double* r = rho.data() + solid.grid.index(0, j, k);
+      for (long i = 0; i < nx; ++i) to[i] = float(double(from[i]) + huPerRelativeDensity * r[i] / rho0);
+    }
   return simCt;
 }
 

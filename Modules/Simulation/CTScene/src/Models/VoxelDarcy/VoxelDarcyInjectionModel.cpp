@@ -466,10 +466,15 @@ public:
 
   // kg/m^3 of cement per ROI voxel (its filled pore fraction at rho0).
   std::vector<double> cementDensity() const override {
+    // Zero but where cement reached (VoxelDarcyFilling::wetVoxels, a superset of those with fill > 0): a pass
+    // over the cement, not a brick lookup per region voxel (issue 23).
     std::vector<double> rho(filling_->medium().count(), 0.0);
-    for (std::size_t c = 0; c < rho.size(); ++c) rho[c] = filling_->fill()[c] * filling_->medium().porosity[c] * rho0_;
+    for (std::size_t c : filling_->wetVoxels()) rho[c] = filling_->fill()[c] * filling_->medium().porosity[c] * rho0_;
     return rho;
   }
+
+  // The voxels cement reached, in index order (kept between calls: the snapshots' buffer).
+  const std::vector<std::size_t>& wetInOrder() const { return snapshots_.wetInOrder.update(filling_->wetVoxels()); }
 
   vtkSmartPointer<vtkPolyData> cement() const override { return cementVoxelsToPolyData(*filling_, rho0_, snapshots_); }
 
@@ -479,7 +484,8 @@ public:
     const VoxelMedium& m = filling.medium();
     double spread = 0, held = 0;
     std::size_t cementVoxels = 0;
-    for (std::size_t c = 0; c < m.count(); ++c) {
+    // The voxels cement reached, in index order (the sums as a pass over the region adds them), not the region.
+    for (std::size_t c : wetInOrder()) {
       const double v = filling.fill()[c] * m.porosity[c];
       if (v <= 0) continue;
       ++cementVoxels;
@@ -549,7 +555,7 @@ public:
     e["cement_voxels"] = cementVoxels;
     e["cannula_shaft_voxels_closed"] = shaftVoxels_;
     double lo = std::numeric_limits<double>::infinity(), hi = 0;
-    for (std::size_t c = 0; c < m.count(); ++c)
+    for (std::size_t c : wetInOrder())
       if (filling.filled(c)) {
         lo = std::min(lo, filling.viscosity()[c]);
         hi = std::max(hi, filling.viscosity()[c]);
@@ -578,8 +584,8 @@ public:
 
   std::vector<std::uint8_t> cementLabels() const override {
     const VoxelMedium& m = filling_->medium();
-    std::vector<std::uint8_t> l(m.count(), 0);
-    for (std::size_t c = 0; c < m.count(); ++c) {
+    std::vector<std::uint8_t> l(m.count(), 0); // 0 where no cement came (fill 0)
+    for (std::size_t c : filling_->wetVoxels()) {
       const bool leaked = !leak_.empty() && leak_[c] && filling_->fill()[c] > 0;
       l[c] = leaked ? 2 : filling_->fill()[c] >= 0.5 ? 1 : 0;
     }
