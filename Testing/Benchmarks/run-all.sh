@@ -14,8 +14,8 @@
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
 #   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
 #                  whole-scan region against the 40 mm one), threads, snapshots (5 ml with its 100 snapshots
-#                  against one), particles (particle-darcy against voxel-darcy, 0.5 and 1 ml), sph, peers (DRR,
-#                  registration);
+#                  against one), particles (particle-darcy against voxel-darcy, 0.5 and 1 ml; PARTICLE_VOLUMES=0.5,1,5
+#                  for 5 ml itself), sph, plan (an oblique plan against the axial one), peers (DRR, registration);
 #                  default all. The tables then hold only those sections' figures
 #
 # Writes OUT_DIR/benchmarks.md (the dated tables, machine and load average) and OUT_DIR/runs.jsonl (every
@@ -135,7 +135,7 @@ def ratio(a, b, f="%.2f"):
 
 
 ONLY = [x.strip() for x in os.environ.get("ONLY", "").split(",") if x.strip()]
-SECTIONS = ("voxel", "region", "threads", "snapshots", "particles", "sph", "peers")
+SECTIONS = ("voxel", "region", "threads", "snapshots", "particles", "sph", "plan", "peers")
 for x in ONLY:
     if x not in SECTIONS:
         sys.exit("run-all.sh: ONLY=%s: unknown section %r; use a comma list of %s" % (os.environ["ONLY"], x, ", ".join(SECTIONS)))
@@ -351,8 +351,33 @@ if want("sph"):
     else:
         details.append("### SPH engine step benchmark\n\nNot built (configure with -DCEMENTSPH_BUILD_BENCHMARKS=ON and build SPHStepBenchmark).\n")
 
+if want("plan") and not QUICK:
+    # 7. An oblique plan against the axial one (issue 20 item 5: "oblique scans plan as fast as axial ones"): the
+    # vertebra phantom and its copy tilted 20 degrees about x, planned with the same request, 1 OpenMP thread, CPU
+    # time. PlanObliqueTest asserts only that the two plans agree; it prints each plan's CPU time, read here.
+    pot = exe(BUILD, "PlanObliqueTest")
+    if pot:
+        rows = ["| field | axial CPU (s) | tilted 20 deg CPU (s) | tilted / axial | per injection | injections axial / tilted |", "|---|---|---|---|---|---|"]
+        per_field = {}
+        for rep in range(REPEATS):
+            log = os.path.join(OUT, "plan-oblique-%d.log" % rep)
+            run([pot, "--gtest_filter=PlanOblique.ATilted*"], log=log)
+            for m in re.finditer(r"plan on a (\S+) x (\S+) x (\S+) mm field, (\S+) / (\S+) injections, CPU: axial (\S+) s, tilted 20 deg (\S+) s \((\S+)x; per injection (\S+)x\)", open(log).read()):
+                field = "%s x %s x %s mm" % m.groups()[:3]
+                per_field.setdefault(field, []).append(m.groups()[3:])
+        for field, rs in per_field.items():
+            ax = statistics.median(float(r[2]) for r in rs)
+            ti = statistics.median(float(r[3]) for r in rs)
+            pi = statistics.median(float(r[5]) for r in rs)
+            rows.append("| %s | %.3f | %.3f | %.2f x | %.2f x | %s / %s |" % (field, ax, ti, ti / ax, pi, rs[0][0], rs[0][1]))
+            summary.append(("plan, tilted 20 deg / axial, %s field" % field, "%.3f s / %.3f s CPU" % (ti, ax),
+                            "%.2f x (per injection %.2f x; target: as fast as axial; load %.1f)" % (ti / ax, pi, loads[-1]), "PlanObliqueTest --gtest_filter=PlanOblique.ATilted*"))
+        details.append("### Oblique plan against axial, vertebra phantom, 1 thread (medians of %d runs of PlanObliqueTest)\n\n%s\n" % (REPEATS, "\n".join(rows)))
+    else:
+        details.append("### Oblique plan against axial\n\nNot built (build the PlanObliqueTest target).\n")
+
 def peers():
-    # 7. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
+    # 8. DRR and registration against their peers (plastimatch, elastix), where built; not in QUICK.
     if not QUICK and want("peers"):
         drr = exe(BUILD, "drr-bench")
         if drr:

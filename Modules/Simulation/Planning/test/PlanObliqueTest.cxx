@@ -5,12 +5,11 @@
 // mm here) over the tilted box, whose corners are air (kOutsideScanHu). Each injection's work scales with the
 // voxels it is given: its region of interest (the same size on both grids) and the bone rule's 100 mm cube
 // about the tip, which the rule cuts to the box of the voxels that are not air (VertebraAnatomy.cpp), so the
-// tilted grid's air corners cost nothing. Measured (2-core VM, load 2.3-2.9, 3 runs): tilted / axial CPU 1.05-1.17x
-// on the bundled field, 0.98-1.14x on the clinical-size one (before the cut: 1.21x and 1.22x).
+// tilted grid's air corners cost nothing.
 // Oracles: the same trajectory verdict; the best plans' coverage within 0.1 of each other (the tilted CT is a
-// trilinear resampling of the axial one, so the two runs differ by the interpolation only); the CPU-time ratio
-// is printed and bounded at 1.5x (the same work up to the interpolated data; the margin is the shared
-// machine's spread, +-0.1 at 1 thread, and far below the 7.5x the issue measured with a resampling per injection).
+// trilinear resampling of the axial one, so the two runs differ by the interpolation only). Speed is not
+// asserted here (a test is no benchmark): the CPU time of each plan is printed, and
+// Testing/Benchmarks/run-all.sh (section plan) reads the printed line into BENCHMARKS.md's tilted / axial ratio.
 #include "cementsph/imaging/AffineRegistration.h"
 #include "cementsph/phantom/VertebraPhantom.h"
 #include "cementsph/planning/InjectionPlanner.h"
@@ -81,7 +80,7 @@ double seconds(const std::function<void()>& f) {
   return double(std::clock() - t0) / CLOCKS_PER_SEC;
 }
 
-void planBothWays(const phantom::VertebraOptions& o, int repeats, double maxRatio) {
+void planBothWays(const phantom::VertebraOptions& o, int repeats) {
   omp_set_num_threads(1); // the work itself, not how the cores were shared
   const phantom::VertebraResult v = phantom::makeVertebra(o);
   const auto oblique = tilted(v.ct, 20.0);
@@ -107,21 +106,20 @@ void planBothWays(const phantom::VertebraOptions& o, int repeats, double maxRati
   EXPECT_TRUE(axialPlan.best.failure.empty());
   EXPECT_TRUE(obliquePlan.best.failure.empty()) << obliquePlan.best.failure;
   EXPECT_NEAR(obliquePlan.best.coverage, axialPlan.best.coverage, 0.1);
-  EXPECT_LT(obliqueS, maxRatio * axialS);
 }
 
 // The bundled phantom's field (64 x 70 x 45 mm): the tilted copy's aligned grid (the series' own spacings over the
 // tilted box, 64 x 81 x 66 mm) has about 1.7x the axial grid's voxels, the extra all air: the bone rule's cube,
 // which holds the whole field, is cut back to about the axial field.
-TEST(PlanOblique, ATiltedCopyPlansAlike) { planBothWays({}, 2, 1.5); }
+TEST(PlanOblique, ATiltedCopyPlansAlike) { planBothWays({}, 2); }
 
 // A clinical-size field (200 x 70 x 200 mm, 1.9 million voxels; tilted about x, so the vertebra, near the y
 // centre, stays inside the tilted grid): aligning the whole scan for every injection
 // would dominate; aligned once, the injections cost what they cost on the axial scan.
-TEST(PlanOblique, ATiltedClinicalSizeScanPlansNearlyAsFastAsTheAxialOne) {
+TEST(PlanOblique, ATiltedClinicalSizeScanPlansAlike) {
   phantom::VertebraOptions o;
   o.fieldMm = {200, 70, 200};
-  planBothWays(o, 1, 1.5);
+  planBothWays(o, 1);
 }
 
 // The same voxels stored with other index axes, the direction saying so: "swapped" (index axes z, -x, y) or
