@@ -255,7 +255,8 @@ void VoxelBricks::reset(const std::array<int, 3>& size) {
   origin_.clear();
 }
 
-VoxelBricks::Cell VoxelBricks::touch(std::size_t c, const std::vector<double>& initialViscosity) {
+VoxelBricks::Cell VoxelBricks::touch(std::size_t c, const std::vector<double>& initialViscosity,
+                                     const std::vector<float>* porosity) {
   const Cell found = find(c);
   if (found.brick) return found;
   const std::size_t nx = std::size_t(size_[0]), ny = std::size_t(size_[1]);
@@ -268,13 +269,16 @@ VoxelBricks::Cell VoxelBricks::touch(std::size_t c, const std::vector<double>& i
     at = std::int32_t(bricks_.size());
     bricks_.push_back(std::move(brick));
     origin_.push_back(first);
-    if (!initialViscosity.empty()) // setVoxelViscosity's values (the part of the brick inside the region)
+    // setVoxelViscosity's values and the impermeable voxels (the part of the brick inside the region)
+    if (!initialViscosity.empty() || porosity)
       for (int local = 0; local < kVoxels; ++local) {
         const std::size_t vi = std::size_t(first[0]) + std::size_t(local & (kEdge - 1)),
                           vj = std::size_t(first[1]) + std::size_t((local >> kEdgeBits) & (kEdge - 1)),
                           vk = std::size_t(first[2]) + std::size_t(local >> (2 * kEdgeBits));
         if (vi >= nx || vj >= ny || vk >= std::size_t(size_[2])) continue;
-        bricks_.back()->voxel[local].viscosity = initialViscosity[vi + nx * (vj + ny * vk)];
+        const std::size_t voxel = vi + nx * (vj + ny * vk);
+        if (!initialViscosity.empty()) bricks_.back()->voxel[local].viscosity = initialViscosity[voxel];
+        if (porosity && (*porosity)[voxel] <= 0) bricks_.back()->flags[local] = kClosedFlag;
       }
   }
   const int local = int(((k & (kEdge - 1)) << (2 * kEdgeBits)) | ((j & (kEdge - 1)) << kEdgeBits) | (i & (kEdge - 1)));
@@ -324,6 +328,8 @@ void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const
     frontStale_ = true; // and its front is searched afresh (the voxel may border the cement)
     medium_.porosity[c] = porosity[i]; // > 0: the voxel is a pore voxel from now on
     medium_.permeability[c] = permeability[i];
+    const VoxelBricks::Cell cell = bricks_.find(c);
+    if (cell.brick) cell.set(VoxelBricks::kClosedFlag, false);
   }
 }
 
@@ -673,7 +679,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   const int unknowns = int(filled_.size());
   for (int row = 0; row < unknowns; ++row) {
     const VoxelBricks::Cell& cell = filledCell_[std::size_t(row)];
-    cell->unknown = row;
+    cell.unknown() = row;
   }
   findFront();
 
@@ -737,16 +743,15 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
         const int sign = pass < 3 ? -1 : 1;
         const int coord = v[std::size_t(axis)] + sign;
         if (coord < 0 || coord >= medium_.size[axis]) continue;
-        const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[axis]);
-        if (medium_.porosity[m] <= 0) continue; // closed
-        // an open neighbour of a filled voxel is filled or on the front: its brick is allocated
+        // An open neighbour of a filled voxel is filled or on the front: its brick is allocated (a closed
+        // one's may not be).
         const VoxelBricks::Cell cell = bricks_.neighbour(own, v, axis, sign);
-        if (cell.has(VoxelBricks::kBarredFlag)) continue;
+        if (!cell.brick || cell.has(VoxelBricks::kClosedFlag | VoxelBricks::kBarredFlag)) continue;
         const double area = faceArea_[std::size_t(axis)], dist = faceDistance_[std::size_t(axis)];
         if (cell.has(VoxelBricks::kFilledFlag)) {
           // The -x and +x neighbours, when filled, are the rows just before and after (rows in voxel
           // order): no read of their numbering.
-          const int other = axis == 0 ? row + sign : cell->unknown;
+          const int other = axis == 0 ? row + sign : cell.unknown();
           double t;
           if (sign < 0) {
             t = upperT[3 * other + axis]; // the lower row's
@@ -761,6 +766,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
         } else {
           // Ghost fluid: p_front at f of the way across the front voxel; half a voxel of this one's
           // mobility in series with f of the front voxel's.
+          const std::size_t m = std::size_t(std::ptrdiff_t(c) + sign * stride[axis]);
           const double lm = mobility(m, cell);
           const double resistance = 0.5 * dist / lc + cell->fill * dist / lm;
           const double t = area / resistance;
@@ -821,14 +827,12 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
     fluxWritten_ = filledCell_;
     fluxWritten_.insert(fluxWritten_.end(), frontCell_.begin(), frontCell_.end());
     for (std::size_t row = 0; row < filled_.size(); ++row) {
-      const std::size_t c = filled_[row];
       const VoxelBricks::Cell own = filledCell_[row];
       const auto& v = filledIjk_[row];
       for (int a = 0; a < 3; ++a) {
         if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
-        const std::size_t m = c + std::size_t(stride[a]);
         const VoxelBricks::Cell cell = bricks_.neighbour(own, v, a, 1);
-        if (state(m, cell) != kFilled) continue;
+        if (!cell.brick || !cell.has(VoxelBricks::kFilledFlag)) continue; // (a filled voxel is open)
         const double t = upperTransmissibility_[3 * row + std::size_t(a)];
         own->faceFlux[a] =
             float(t * (own->pressure - cell->pressure));

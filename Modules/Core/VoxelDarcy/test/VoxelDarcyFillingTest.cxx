@@ -171,6 +171,26 @@ TEST(VoxelDarcyFilling, ACementThatCannotGoOnIsAClearError) {
   EXPECT_THROW(filling.setSource(Eigen::Vector3d::Zero(), 1e-3), std::invalid_argument); // a solid voxel
 }
 
+// A tube of one voxel's section with a closed voxel across it: the cement stops at it; opened
+// (openVoxels, as the tract a withdrawn cannula leaves) after the voxel's brick was allocated, the cement
+// goes on through it. In one dimension the filling is exact: 9.5 voxels injected fill the first 9 and half
+// the tenth (the volume conservation's own answer, independent of the pressure). The closed voxel's flag
+// in its brick must go with it: left set, the assembly never links the opened voxel and the second half
+// fails with "the pore space connected to the outlet is full".
+TEST(VoxelDarcyFilling, AVoxelOpenedAfterTheCementReachedItsBrickLetsTheCementThrough) {
+  const double h = 1e-3, pore = h * h * h;
+  VoxelMedium m = VoxelMedium::uniform({20, 1, 1}, Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(h), 1.0, kK);
+  m.porosity[5] = 0.0f;
+  VoxelDarcyFilling filling(m);
+  filling.setSource(Eigen::Vector3d::Zero(), 0.1 * h);
+  filling.setViscosity(kMu);
+  inject(filling, kQ, 4.5 * pore); // (the first 5 voxels hold 5)
+  ASSERT_NEAR(filling.fill()[4], 0.5, 1e-9);
+  filling.openVoxels({5}, {1.0f}, {kK});
+  inject(filling, kQ, 9.5 * pore);
+  for (std::size_t c = 0; c < 20; ++c) EXPECT_NEAR(filling.fill()[c], c < 9 ? 1.0 : c == 9 ? 0.5 : 0.0, 1e-9) << "voxel " << c;
+}
+
 // Radial power-law Darcy flow (issue "Cement rheology"): with mu = K gamma_dot^(n-1) and the Darcy-scale
 // shear rate gamma_dot = alpha q / sqrt(k phi) (rheology::darcyShearRate), |grad p| = C q^n with
 // C = K alpha^(n-1) (k phi)^((1-n)/2) / k and q = Q / (4 pi r^2), so outside the outlet

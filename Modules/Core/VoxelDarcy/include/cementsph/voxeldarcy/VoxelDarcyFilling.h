@@ -37,6 +37,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -125,25 +126,30 @@ private:
 class VoxelBricks {
 public:
   static constexpr int kEdgeBits = 3, kEdge = 1 << kEdgeBits, kVoxels = kEdge * kEdge * kEdge;
-  // One voxel's values together (56 bytes): a pass reads several of a voxel and its neighbours at once,
-  // and field arrays 4 kB apart in a brick would meet in the same cache sets. The flags, which the front
-  // search and the assembly test for every neighbour, are kept apart, a byte a voxel (their working set
-  // is then that of a dense byte array, not 56 bytes a voxel).
+  // One voxel's values together (48 bytes): a pass reads several of a voxel and its neighbours at once,
+  // and field arrays 4 kB apart in a brick would meet in the same cache sets. The flags and the row
+  // numbers, which the front search and the assembly read for every neighbour, are kept apart, a byte
+  // and 4 bytes a voxel (their working set is then that of dense arrays, not 48 bytes a voxel).
   struct Voxel {
     double fill = 0, pressure = 0, viscosity = 1, arrival = -1;
     float faceFlux[3] = {0, 0, 0}; // (+x, +y, +z) faces of the last solve [m^3/s]
-    int unknown = -1;              // row of the pressure system, or -1
   };
-  enum : std::uint8_t { kFilledFlag = 1, kBarredFlag = 2, kInFrontFlag = 4 };
+  // kClosedFlag: an impermeable voxel (porosity 0), set when the brick is allocated (touch with the
+  // porosity) and cleared by openVoxels: the assembly reads it with the neighbour's other flags instead of
+  // the region-sized porosity array.
+  enum : std::uint8_t { kFilledFlag = 1, kBarredFlag = 2, kInFrontFlag = 4, kClosedFlag = 8 };
   struct Brick {
-    std::uint8_t flags[kVoxels] = {}; // kFilledFlag | kBarredFlag | kInFrontFlag
+    std::uint8_t flags[kVoxels] = {}; // kFilledFlag | kBarredFlag | kInFrontFlag | kClosedFlag
+    std::int32_t unknown[kVoxels];    // row of the pressure system (filled voxels), or -1
     Voxel voxel[kVoxels];             // local index (k % 8) * 64 + (j % 8) * 8 + i % 8
+    Brick() { std::fill(unknown, unknown + kVoxels, -1); }
   };
   struct Cell {
     Brick* brick = nullptr; // null: a brick not allocated (every value at its initial one)
     int local = 0;
     Voxel* operator->() const { return &brick->voxel[local]; }
-    bool has(std::uint8_t flag) const { return brick->flags[local] & flag; }
+    std::int32_t& unknown() const { return brick->unknown[local]; }
+    bool has(std::uint8_t flag) const { return brick->flags[local] & flag; } // (any of the flags in `flag`)
     void set(std::uint8_t flag, bool on) const {
       brick->flags[local] = std::uint8_t(on ? brick->flags[local] | flag : brick->flags[local] & ~flag);
     }
@@ -180,8 +186,9 @@ public:
     w[std::size_t(axis)] += sign;
     return find(w[0], w[1], w[2]);
   }
-  // The voxel's brick, allocated (viscosity from `initialViscosity` when not empty, else 1) if it was not.
-  Cell touch(std::size_t c, const std::vector<double>& initialViscosity);
+  // The voxel's brick, allocated (viscosity from `initialViscosity` when not empty, else 1; kClosedFlag where
+  // `porosity`, when given, is 0) if it was not.
+  Cell touch(std::size_t c, const std::vector<double>& initialViscosity, const std::vector<float>* porosity = nullptr);
   std::size_t allocated() const { return bricks_.size(); }
   std::size_t bytes() const { return bricks_.size() * sizeof(Brick) + directory_.size() * sizeof(std::int32_t); }
   // f(voxel, brick, local) over the voxels of the allocated bricks that lie in the region
@@ -363,7 +370,7 @@ private:
   double mobility(std::size_t c, const VoxelBricks::Cell& cell) const {
     return medium_.permeability[c] / viscosityAt(c, cell);
   }
-  VoxelBricks::Cell touch(std::size_t c) { return bricks_.touch(c, voxelViscosity_); }
+  VoxelBricks::Cell touch(std::size_t c) { return bricks_.touch(c, voxelViscosity_, &medium_.porosity); }
   // A front voxel held back by its capillary entry pressure this step (front voxels' bricks are allocated).
   bool barredAt(std::size_t c) const {
     const VoxelBricks::Cell cell = bricks_.find(c);
