@@ -52,7 +52,12 @@ void PressureSystem::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) cons
 // without unpredictable branches. The coupling to the row just before and just after (the voxel's -x and
 // +x neighbours) is kept apart: in the triangular sweeps it is the chain each row waits on, and held in a
 // register it costs one multiply-add per row instead of a store, a load and two operations.
+// The MIC(0) factor is made in the same pass over the rows (it reads the row's lower entries as the copy
+// does): L D L^T with L = I + (strictly lower part of A) D^-1, pivot d_i = a_ii - sum over the lower
+// neighbours k of a_ik^2 / d_k + tau a_ik (the rest of row k's upper part) / d_k, the dropped fill moved
+// onto the diagonal (tau 0.97); a pivot below 0.25 a_ii (a nearly singular row) falls back to a_ii.
 void PressureSolver::pad(const PressureSystem& A) {
+  constexpr double tau = 0.97, safety = 0.25;
   const int n = A.rows();
   lowerWidth_ = upperWidth_ = 0;
   previous_.assign(std::size_t(n), 0.0);
@@ -69,27 +74,43 @@ void PressureSolver::pad(const PressureSystem& A) {
   upperColumn_.assign(std::size_t(n) * std::size_t(upperWidth_), n);
   upperValue_.assign(upperColumn_.size(), 0.0);
   diagonalValue_.resize(std::size_t(n));
+  for (std::vector<double>* v : {&pivot_, &inversePivot_, &previousScaled_, &nextScaled_, &upperSum_})
+    v->resize(std::size_t(n)); // (kept from solve to solve: no fresh pages each step)
   for (int i = 0; i < n; ++i) {
     const int d = A.diagonal[std::size_t(i)];
-    diagonalValue_[std::size_t(i)] = A.value[std::size_t(d)];
+    const double diagonal = A.value[std::size_t(d)];
+    diagonalValue_[std::size_t(i)] = diagonal;
+    double pivot = diagonal;
     std::size_t slot = std::size_t(i) * std::size_t(lowerWidth_);
     for (int e = A.rowStart[std::size_t(i)]; e < d; ++e) {
-      if (A.column[std::size_t(e)] == i - 1) {
-        previous_[std::size_t(i)] = A.value[std::size_t(e)];
+      const int j = A.column[std::size_t(e)];
+      const double a = A.value[std::size_t(e)];
+      pivot -= (a * a + tau * a * (upperSum_[std::size_t(j)] - a)) / pivot_[std::size_t(j)];
+      if (j == i - 1) {
+        previous_[std::size_t(i)] = a;
         continue;
       }
-      lowerColumn_[slot] = A.column[std::size_t(e)];
-      lowerValue_[slot++] = A.value[std::size_t(e)];
+      lowerColumn_[slot] = j;
+      lowerValue_[slot++] = a;
     }
     slot = std::size_t(i) * std::size_t(upperWidth_);
+    double upper = 0;
     for (int e = d + 1; e < A.rowStart[std::size_t(i) + 1]; ++e) {
+      const double a = A.value[std::size_t(e)];
+      upper += a;
       if (A.column[std::size_t(e)] == i + 1) {
-        next_[std::size_t(i)] = A.value[std::size_t(e)];
+        next_[std::size_t(i)] = a;
         continue;
       }
       upperColumn_[slot] = A.column[std::size_t(e)];
-      upperValue_[slot++] = A.value[std::size_t(e)];
+      upperValue_[slot++] = a;
     }
+    if (!(pivot >= safety * diagonal)) pivot = diagonal;
+    pivot_[std::size_t(i)] = pivot;
+    inversePivot_[std::size_t(i)] = 1.0 / pivot;
+    previousScaled_[std::size_t(i)] = previous_[std::size_t(i)] / pivot;
+    nextScaled_[std::size_t(i)] = next_[std::size_t(i)] / pivot;
+    upperSum_[std::size_t(i)] = upper;
   }
 }
 
@@ -113,33 +134,6 @@ double PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
     xy += x[i] * sum;
   }
   return xy;
-}
-
-// MIC(0) as L D L^T with L = I + (strictly lower part of A) D^-1: pivot d_i = a_ii - sum over the lower
-// neighbours k of a_ik^2 / d_k + tau a_ik (the rest of row k's upper part) / d_k, the dropped fill moved
-// onto the diagonal (tau 0.97); a pivot below 0.25 a_ii (a nearly singular row) falls back to a_ii.
-void PressureSolver::factor(const PressureSystem& A) {
-  constexpr double tau = 0.97, safety = 0.25;
-  const int n = A.rows();
-  for (std::vector<double>* v : {&pivot_, &inversePivot_, &previousScaled_, &nextScaled_, &upperSum_})
-    v->resize(std::size_t(n)); // (kept from solve to solve: no fresh pages each step)
-  for (int i = 0; i < n; ++i) {
-    const double diagonal = A.value[std::size_t(A.diagonal[std::size_t(i)])];
-    double e = diagonal;
-    for (int k = A.rowStart[std::size_t(i)]; k < A.diagonal[std::size_t(i)]; ++k) {
-      const int j = A.column[std::size_t(k)];
-      const double a = A.value[std::size_t(k)];
-      e -= (a * a + tau * a * (upperSum_[std::size_t(j)] - a)) / pivot_[std::size_t(j)];
-    }
-    if (!(e >= safety * diagonal)) e = diagonal;
-    pivot_[std::size_t(i)] = e;
-    inversePivot_[std::size_t(i)] = 1.0 / e;
-    previousScaled_[std::size_t(i)] = previous_[std::size_t(i)] / e;
-    nextScaled_[std::size_t(i)] = next_[std::size_t(i)] / e;
-    double upper = 0;
-    for (int k = A.diagonal[std::size_t(i)] + 1; k < A.rowStart[std::size_t(i) + 1]; ++k) upper += A.value[std::size_t(k)];
-    upperSum_[std::size_t(i)] = upper;
-  }
 }
 
 // z = (L D L^T)^-1 r: forward sweep y_i = r_i - sum_k a_ik y_k / d_k (kept as q_i = y_i / d_i), then
@@ -220,7 +214,6 @@ PressureSolver::Result PressureSolver::run(const PressureSystem& A, const double
     r2 += r[i] * r[i];
   }
   if (r2 >= threshold) {
-    factor(A);
     double rz = preconditionPadded<L, U>(r, z, n);
     std::copy(z, z + n, p);
     while (result.iterations < maxIterations) {

@@ -107,8 +107,7 @@ public:
   Result solve(const PressureSystem& A, const double* b, double* x, double tolerance, int maxIterations);
 
 private:
-  void pad(const PressureSystem& A);
-  void factor(const PressureSystem& A);
+  void pad(const PressureSystem& A); // the padded copy and its MIC(0) factor
   template <int L, int U> double multiplyPadded(const double* x, double* y, int n) const; // y = A x; returns x . y
   template <int L, int U> double preconditionPadded(const double* r, double* z, int n) const; // returns r . z
   template <int L, int U>
