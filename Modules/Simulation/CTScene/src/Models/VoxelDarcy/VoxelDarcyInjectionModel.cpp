@@ -243,9 +243,12 @@ struct SnapshotBuffers {
   std::vector<VoxelDarcyFilling::VoxelState> states;
 };
 
-// One point per voxel holding cement.
+// One point per voxel holding cement. `whole`: every array; else (the snapshots during the run, issue 23) not
+// the three that the last snapshot holds for every voxel of every earlier one or that the others give:
+// arrival_time_s and permeability_m2 never change once a voxel has cement, and fill_fraction is
+// cement_volume_mm3 / (porosity x the voxel's volume). A fifth of the bytes a snapshot's writing compresses.
 vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity,
-                                                    SnapshotBuffers& buffers) {
+                                                    SnapshotBuffers& buffers, bool whole) {
   const VoxelMedium& m = f.medium();
   // The wet voxels, not the whole region (issue 23: a snapshot costs what the cement holds), in index order
   // as before so that the points come out in the same order.
@@ -277,11 +280,13 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
   auto floats = [&](const char* name, int components = 1) {
     return make(vtkSmartPointer<vtkFloatArray>::New(), name, components);
   };
+  const vtkIdType nWhole = whole ? n : 0; // the arrays only the whole set holds have no values otherwise
   auto fill = doubles("fill_fraction"), volume = doubles("cement_volume_mm3");
   auto pressure = floats("pressure_pa"), velocity = floats("darcy_velocity_m_per_s", 3),
        viscosity = floats("viscosity_pa_s"), porosity = floats("porosity"), permeability = floats("permeability_m2"),
        arrival = floats("arrival_time_s"), age = floats("age_s"), speed = floats("velocity_m_per_s", 3),
        density = floats("density_kg_per_m3");
+  for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, permeability, arrival}) a->SetNumberOfTuples(nWhole);
   float* xyz = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0);
   double *fillOut = fill->GetPointer(0), *volumeOut = volume->GetPointer(0);
   float *pressureOut = pressure->GetPointer(0), *velocityOut = velocity->GetPointer(0),
@@ -302,7 +307,6 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     const VoxelDarcyFilling::VoxelState& s = states[std::size_t(i)];
     const Eigen::Vector3d x = m.centre(c) * 1e3;
     for (int a = 0; a < 3; ++a) xyz[3 * i + a] = float(x[a]);
-    fillOut[i] = s.fill;
     volumeOut[i] = s.fill * m.porosity[c] * m.voxelVolume() * 1e9;
     pressureOut[i] = float(s.pressure);
     const Eigen::Vector3d& q = s.darcyVelocity;
@@ -314,9 +318,12 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     densityOut[i] = float(restDensity);
     viscosityOut[i] = float(s.viscosity);
     porosityOut[i] = m.porosity[c];
-    permeabilityOut[i] = float(m.permeability[c]);
-    arrivalOut[i] = float(s.arrival);
     ageOut[i] = float(f.time() - s.arrival);
+    if (whole) {
+      fillOut[i] = s.fill;
+      permeabilityOut[i] = float(m.permeability[c]);
+      arrivalOut[i] = float(s.arrival);
+    }
     offsetOut[i] = vtkTypeInt32(i); // one vertex per cell
     connectivityOut[i] = vtkTypeInt32(i);
   }
@@ -328,7 +335,7 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
   poly->SetVerts(verts);
   for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, volume, pressure, velocity, viscosity, porosity,
                                                                permeability, arrival, age, speed, density})
-    poly->GetPointData()->AddArray(a);
+    if (whole || a->GetNumberOfTuples() == n) poly->GetPointData()->AddArray(a);
   return poly;
 }
 
@@ -476,7 +483,11 @@ public:
   // The voxels cement reached, in index order (kept between calls: the snapshots' buffer).
   const std::vector<std::size_t>& wetInOrder() const { return snapshots_.wetInOrder.update(filling_->wetVoxels()); }
 
-  vtkSmartPointer<vtkPolyData> cement() const override { return cementVoxelsToPolyData(*filling_, rho0_, snapshots_); }
+  // The snapshots during the run hold the reduced set, the last one (after finish) and the result every array.
+  vtkSmartPointer<vtkPolyData> cement() const override {
+    return cementVoxelsToPolyData(*filling_, rho0_, snapshots_, finished_);
+  }
+  void finish(bool) override { finished_ = true; }
 
   void report(InjectionSummary& s, json& e) const override {
     const SceneConfig& scene = *scene_;
@@ -893,6 +904,7 @@ private:
   std::vector<float> tractPorosity_;
   std::vector<double> tractPermeability_;
   std::unique_ptr<VoxelDarcyFilling> filling_;
+  bool finished_ = false;             // finish() called: cement() gives every array
   mutable SnapshotBuffers snapshots_; // kept between snapshots (cement() is const to the driver)
   std::optional<sph::ViscositySchedule> viscosity_;
   std::shared_ptr<const sph::Rheology> law_;
