@@ -138,24 +138,37 @@ double PressureSolver::multiplyPadded(const double* x, double* y, int n) const {
 
 // z = (L D L^T)^-1 r: forward sweep y_i = r_i - sum_k a_ik y_k / d_k (kept as q_i = y_i / d_i), then
 // backward z_i = q_i - sum_j a_ij z_j / d_i over the upper neighbours. z[n] stays 0 (the empty slots').
+// The forward sweep goes in the same pass as CG's update of x and r (x += alpha p, r -= alpha q, with
+// |r|^2): row i's sweep needs r_i and the rows before it only. alpha 0 leaves x and r as they are.
 template <int L, int U>
-double PressureSolver::preconditionPadded(const double* r, double* z, int n) const {
-  const int wl = L >= 0 ? L : lowerWidth_, wu = U >= 0 ? U : upperWidth_;
+double PressureSolver::updateAndForward(double alpha, double* x, const double* p, double* r, const double* q, double* z,
+                                        int n) const {
+  const int wl = L >= 0 ? L : lowerWidth_;
   const int* lc = lowerColumn_.data();
   const double* lv = lowerValue_.data();
-  const int* uc = upperColumn_.data();
-  const double* uv = upperValue_.data();
   const double* inverse = inversePivot_.data();
   const double* ps = previousScaled_.data();
-  const double* ns = nextScaled_.data();
-  double chain = 0; // z of the row just done
+  double chain = 0, r2 = 0; // chain: z of the row just done
   for (int i = 0; i < n; ++i) {
+    x[i] += alpha * p[i];
+    r[i] -= alpha * q[i];
+    r2 += r[i] * r[i];
     double t = r[i];
     for (int e = 0; e < wl; ++e) t -= lv[i * wl + e] * z[lc[i * wl + e]];
     chain = t * inverse[i] - ps[i] * chain;
     z[i] = chain;
   }
-  chain = 0;
+  return r2;
+}
+
+template <int L, int U>
+double PressureSolver::backward(const double* r, double* z, int n) const {
+  const int wu = U >= 0 ? U : upperWidth_;
+  const int* uc = upperColumn_.data();
+  const double* uv = upperValue_.data();
+  const double* inverse = inversePivot_.data();
+  const double* ns = nextScaled_.data();
+  double chain = 0;
   double rz = 0; // r . z, which CG needs next
   for (int i = n - 1; i >= 0; --i) {
     double t = 0;
@@ -214,20 +227,16 @@ PressureSolver::Result PressureSolver::run(const PressureSystem& A, const double
     r2 += r[i] * r[i];
   }
   if (r2 >= threshold) {
-    double rz = preconditionPadded<L, U>(r, z, n);
+    updateAndForward<L, U>(0.0, x, p, r, q, z, n);
+    double rz = backward<L, U>(r, z, n);
     std::copy(z, z + n, p);
     while (result.iterations < maxIterations) {
       const double alpha = rz / multiplyPadded<L, U>(p, q, n);
-      r2 = 0;
-      for (int i = 0; i < n; ++i) {
-        x[i] += alpha * p[i];
-        r[i] -= alpha * q[i];
-        r2 += r[i] * r[i];
-      }
+      r2 = updateAndForward<L, U>(alpha, x, p, r, q, z, n);
       ++result.iterations;
       if (r2 < threshold) break;
       const double rzOld = rz;
-      rz = preconditionPadded<L, U>(r, z, n);
+      rz = backward<L, U>(r, z, n);
       const double beta = rz / rzOld;
       for (int i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
     }

@@ -109,7 +109,10 @@ public:
 private:
   void pad(const PressureSystem& A); // the padded copy and its MIC(0) factor
   template <int L, int U> double multiplyPadded(const double* x, double* y, int n) const; // y = A x; returns x . y
-  template <int L, int U> double preconditionPadded(const double* r, double* z, int n) const; // returns r . z
+  // x += alpha p, r -= alpha q and the preconditioner's forward sweep of the new r into z; returns |r|^2
+  template <int L, int U>
+  double updateAndForward(double alpha, double* x, const double* p, double* r, const double* q, double* z, int n) const;
+  template <int L, int U> double backward(const double* r, double* z, int n) const; // its backward sweep; returns r . z
   template <int L, int U>
   Result run(const PressureSystem& A, const double* b, double* x, double tolerance, int maxIterations);
   std::vector<double> pivot_, inversePivot_, previousScaled_, nextScaled_, upperSum_, r_, z_, p_, q_;
