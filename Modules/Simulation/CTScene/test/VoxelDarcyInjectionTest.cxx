@@ -7,7 +7,9 @@
 //  * the files of an injection, and the metrics' keys;
 //  * every snapshot file, read back with VTK's reader, holds the volume injected at its time (flow rate x time)
 //    and the interstitial velocity darcy_velocity / porosity, one vertex cell per point (issue 23: the
-//    snapshots are written on a second thread while the run goes on, with 32-bit vertex ids).
+//    snapshots are written on a second thread while the run goes on, with 32-bit vertex ids);
+//  * the snapshots before the last leave out fill_fraction, permeability_m2 and arrival_time_s, which the last
+//    snapshot and their own arrays give back (arrival = time - age_s, to float round-off).
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/InjectionRunner.h"
@@ -25,6 +27,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 
@@ -206,4 +209,44 @@ TEST(VoxelDarcyInjection, EverySnapshotFileHoldsTheVolumeInjectedAtItsTime) {
     EXPECT_EQ(poly->GetVerts()->GetConnectivityArray()->GetTuple1(n - 1), double(n - 1)) << name;
   }
   EXPECT_EQ(files, 24u); // at 0.25, 0.5, ..., 5.75 s and the end (6 s)
+}
+
+TEST(VoxelDarcyInjection, TheEarlierSnapshotsLeaveOutOnlyWhatTheLastOneAndTheirOwnArraysGive) {
+  // 0.3 ml in 6 s, a snapshot every 2 s: particles_0000 (2 s), 0001 (4 s), 0002 (the end, 6 s). The earlier
+  // ones hold no fill_fraction, permeability_m2 or arrival_time_s (issue 23: a fifth of a snapshot's bytes);
+  // the last holds every array. What they leave out is there: every voxel of an earlier snapshot is in the last
+  // with the same position, its arrival there is its snapshot's time minus its age then (float age_s: 1e-5 s),
+  // and its fill is cement_volume_mm3 / (porosity x voxel volume) with the voxel's 0.5 mm edge.
+  const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "voxel-darcy-reduced-snapshots";
+  run(100.0, out, 2.0);
+  const auto last = imaging::readPolyData((out / "particles_0002.vtp").string());
+  for (const char* name : {"fill_fraction", "permeability_m2", "arrival_time_s", "age_s", "cement_volume_mm3"})
+    ASSERT_NE(last->GetPointData()->GetArray(name), nullptr) << name;
+  auto key = [](const double* x) {
+    return std::to_string(std::lround(x[0] * 1e3)) + "," + std::to_string(std::lround(x[1] * 1e3)) + "," +
+           std::to_string(std::lround(x[2] * 1e3));
+  };
+  std::map<std::string, vtkIdType> inLast;
+  for (vtkIdType i = 0; i < last->GetNumberOfPoints(); ++i) inLast[key(last->GetPoint(i))] = i;
+  const double voxelMm3 = 0.5 * 0.5 * 0.5;
+  for (const auto& [file, t] : {std::pair<const char*, double>{"particles_0000.vtp", 2.0}, {"particles_0001.vtp", 4.0}}) {
+    const auto poly = imaging::readPolyData((out / file).string());
+    vtkPointData* d = poly->GetPointData();
+    for (const char* name : {"fill_fraction", "permeability_m2", "arrival_time_s"})
+      EXPECT_EQ(d->GetArray(name), nullptr) << file << " " << name;
+    auto *age = d->GetArray("age_s"), *volume = d->GetArray("cement_volume_mm3"), *phi = d->GetArray("porosity");
+    ASSERT_TRUE(age && volume && phi) << file;
+    ASSERT_GT(poly->GetNumberOfPoints(), 100) << file;
+    double worstArrival = 0;
+    for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
+      const auto at = inLast.find(key(poly->GetPoint(i)));
+      ASSERT_NE(at, inLast.end()) << file << " point " << i;
+      const double arrival = last->GetPointData()->GetArray("arrival_time_s")->GetTuple1(at->second);
+      worstArrival = std::max(worstArrival, std::abs(t - age->GetTuple1(i) - arrival));
+      const double fill = volume->GetTuple1(i) / (phi->GetTuple1(i) * voxelMm3);
+      EXPECT_GT(fill, 0.0) << file << " point " << i;
+      EXPECT_LE(fill, 1.0 + 1e-6) << file << " point " << i;
+    }
+    EXPECT_LT(worstArrival, 1e-5) << file;
+  }
 }
