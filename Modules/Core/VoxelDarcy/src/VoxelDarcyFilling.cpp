@@ -823,23 +823,25 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
     return up;
   };
   // Face fluxes of the last solve (velocities, shear rates), signed along +axis; a front link's is its inflow.
+  // Every face flux written before is on a voxel filled or on the front now (a filled voxel stays filled, a
+  // front voxel stays on the front until it fills), so writing all three of each of those (0 where no flux
+  // goes) leaves no stale value, without a list of the voxels written last time.
   auto faceFluxes = [&]() {
-    for (const VoxelBricks::Cell& cell : fluxWritten_)
-      for (int a = 0; a < 3; ++a) cell->faceFlux[a] = 0.0f;
-    fluxWritten_ = filledCell_;
-    fluxWritten_.insert(fluxWritten_.end(), frontCell_.begin(), frontCell_.end());
     for (std::size_t row = 0; row < filled_.size(); ++row) {
       const VoxelBricks::Cell own = filledCell_[row];
       const auto& v = filledIjk_[row];
       for (int a = 0; a < 3; ++a) {
-        if (v[std::size_t(a)] + 1 >= medium_.size[a]) continue;
-        const VoxelBricks::Cell cell = bricks_.neighbour(own, v, a, 1);
-        if (!cell.brick || !cell.has(VoxelBricks::kFilledFlag)) continue; // (a filled voxel is open)
-        const double t = upperTransmissibility_[3 * row + std::size_t(a)];
-        own->faceFlux[a] =
-            float(t * (own->pressure - cell->pressure));
+        float flux = 0.0f; // (closed, the region's side, or on the front: the links below)
+        if (v[std::size_t(a)] + 1 < medium_.size[a]) {
+          const VoxelBricks::Cell cell = bricks_.neighbour(own, v, a, 1);
+          if (cell.brick && cell.has(VoxelBricks::kFilledFlag)) // (a filled voxel is open)
+            flux = float(upperTransmissibility_[3 * row + std::size_t(a)] * (own->pressure - cell->pressure));
+        }
+        own->faceFlux[a] = flux;
       }
     }
+    for (const VoxelBricks::Cell& cell : frontCell_)
+      for (int a = 0; a < 3; ++a) cell->faceFlux[a] = 0.0f;
     for (const Link& l : links) {
       const VoxelBricks::Cell& from = l.fromCell;
       const VoxelBricks::Cell& to = l.toCell;

@@ -418,7 +418,6 @@ private:
   std::vector<std::size_t> justFilled_;                // voxels filled since the last findFront
   std::vector<std::pair<std::size_t, VoxelBricks::Cell>> frontAdded_; // findFront's newcomers (buffer)
   bool frontStale_ = true;                             // findFront searches from every filled voxel
-  std::vector<VoxelBricks::Cell> fluxWritten_;          // the voxels whose face fluxes were written
   std::vector<std::array<int, 3>> filledIjk_;          // and each filled_ voxel's (i, j, k)
   std::vector<std::size_t> mergedVoxels_;              // step's merge of newlyFilled_ into filled_ (buffers)
   std::vector<VoxelBricks::Cell> mergedCells_;
