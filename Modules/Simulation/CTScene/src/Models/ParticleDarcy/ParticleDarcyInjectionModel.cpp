@@ -143,6 +143,7 @@ constexpr double kMaxCorrectionOverDarcy = 2.0; // the step's speed is at most t
 constexpr double kShiftA = 2.0;          // Lind et al. 2012: D = A h |u| dt
 constexpr double kMaxShiftOverD = 0.1;   // largest shift per step
 constexpr double kCannulaWallM = 0.33e-3; // 11G regular wall (as the voxel model)
+constexpr double kMaxSightTableBytes = 256e6; // the ghosts' sight tables' memory bound (ghostHidden)
 
 // Wendland C2 in 3D, support 2h: W = 21/(16 pi h^3) (1 - q/2)^4 (2q + 1); F/r = -W'(r)/r = 105/(16 pi h^5) (1 - q/2)^3.
 struct Kernel {
@@ -859,7 +860,10 @@ private:
     missingMoment_.assign(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) { // the sight tables the loop below fills (one per home voxel, ghostHidden)
       const long home = voxel(x_[i]);
-      if (home >= 0 && sightCheck_[std::size_t(home)] && sightSlot_[std::size_t(home)] < 0) {
+      // At most kMaxSightTableBytes of tables (a fine CT under coarse particles has many voxels per support):
+      // beyond it a particle's home without a table walks from the particle itself, as before the tables.
+      const bool room = double(sightBits_.size() + 1) * double((sightEntries_ + 3) / 4) <= kMaxSightTableBytes;
+      if (home >= 0 && sightCheck_[std::size_t(home)] && sightSlot_[std::size_t(home)] < 0 && room) {
         sightSlot_[std::size_t(home)] = std::int32_t(sightBits_.size());
         sightBits_.emplace_back(new std::atomic<std::uint8_t>[(sightEntries_ + 3) / 4]());
       }
@@ -914,7 +918,8 @@ private:
               num += vcOverV * kernel_.w(rn);
               // An empty pore behind solid is space (it counts in the number density) but no ghost: no
               // pressure coupling crosses a closed voxel (lineOfSightBlocked).
-              if (checkSight && ghostHidden(std::size_t(home), h, ii, j, k)) {
+              if (checkSight && (sightSlot_[std::size_t(home)] >= 0 ? ghostHidden(std::size_t(home), h, ii, j, k)
+                                                                    : lineOfSightBlocked(p, r + p))) {
                 missing += vc * f * r2;
                 continue;
               }
