@@ -733,11 +733,12 @@ private:
     const int side = 2 * sightM_ + 1;
     const int e = sightIndex_[std::size_t(i - h[0] + sightM_) +
                               std::size_t(side) * (std::size_t(j - h[1] + sightM_) + std::size_t(side) * std::size_t(k - h[2] + sightM_))];
+    const Eigen::Vector3d from = g.centre(h[0], h[1], h[2]) + Eigen::Vector3d(0.011, 0.023, 0.037).cwiseProduct(g.spacing);
+    if (e < 0) return lineOfSightBlocked(from, g.centre(i, j, k)); // an offset the table lacks (a rounding guard)
     std::atomic<std::uint8_t>& byte = sightBits_[std::size_t(sightSlot_[home])][std::size_t(e) / 4];
     const int shift = 2 * (e % 4);
     const std::uint8_t known = std::uint8_t((byte.load(std::memory_order_relaxed) >> shift) & 3);
     if (known) return known == 2;
-    const Eigen::Vector3d from = g.centre(h[0], h[1], h[2]) + Eigen::Vector3d(0.011, 0.023, 0.037).cwiseProduct(g.spacing);
     const bool hidden = lineOfSightBlocked(from, g.centre(i, j, k));
     byte.fetch_or(std::uint8_t((hidden ? 2 : 1) << shift), std::memory_order_relaxed);
     return hidden;
