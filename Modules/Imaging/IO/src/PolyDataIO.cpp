@@ -22,6 +22,9 @@ void writePolyData(vtkPolyData* surface, const std::string& path) {
     writer->EncodeAppendedDataOff();
     // LZ4: 4-5x faster than zlib for a few per cent more bytes (a 5 ml run writes a hundred snapshots).
     writer->SetCompressorTypeToLZ4();
+    // Blocks of 1 MiB, not VTK's 32 KiB: 4 % fewer bytes and fewer block headers and writes for a snapshot of a
+    // few MB (a 47 842-point snapshot: 2.26 MB against 2.35 MB). VTK's reader takes any block size.
+    writer->SetBlockSize(1 << 20);
     // VTK reports a full disk through the error code only (Write() still returns 1).
     if (writer->Write() != 1 || writer->GetErrorCode() != 0)
       throw std::runtime_error("VTK could not write the surface (disk full or over the file size limit?)");
