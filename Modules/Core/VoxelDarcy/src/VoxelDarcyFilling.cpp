@@ -192,8 +192,78 @@ PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const Eige
 PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const double* b, double* x, double tolerance,
                                              int maxIterations) {
   pad(A);
-  if (lowerWidth_ == 2 && upperWidth_ == 2) return run<2, 2>(A, b, x, tolerance, maxIterations); // the voxels' 7 points
-  return run<-1, -1>(A, b, x, tolerance, maxIterations);
+  if (lowerWidth_ == 2 && upperWidth_ == 2) return run<2, 2>(A.rows(), b, x, tolerance, maxIterations); // the voxels' 7 points
+  return run<-1, -1>(A.rows(), b, x, tolerance, maxIterations);
+}
+
+void PressureSolver::startRows(int n) {
+  rows_ = n;
+  lowerWidth_ = upperWidth_ = 2;
+  usedLower_ = usedUpper_ = 0;
+  for (std::vector<double>* v : {&previous_, &next_, &diagonalValue_, &pivot_, &inversePivot_, &previousScaled_,
+                                 &nextScaled_, &upperSum_})
+    v->resize(std::size_t(n)); // (every entry written by setRow)
+  lowerColumn_.resize(2 * std::size_t(n));
+  upperColumn_.resize(2 * std::size_t(n));
+  lowerValue_.resize(2 * std::size_t(n));
+  upperValue_.resize(2 * std::size_t(n));
+}
+
+// As pad's pass over one row (an empty slot points at the vectors' zero entry n).
+void PressureSolver::setRow(int i, double diagonal, double previous, double next, int lowerCount, const int* lowerColumn,
+                            const double* lowerValue, int upperCount, const int* upperColumn, const double* upperValue) {
+  constexpr double tau = 0.97, safety = 0.25;
+  const std::size_t at = std::size_t(i);
+  diagonalValue_[at] = diagonal;
+  previous_[at] = previous;
+  next_[at] = next;
+  usedLower_ = std::max(usedLower_, lowerCount);
+  usedUpper_ = std::max(usedUpper_, upperCount);
+  double pivot = diagonal;
+  for (int e = 0; e < 2; ++e) {
+    const bool used = e < lowerCount;
+    lowerColumn_[2 * at + std::size_t(e)] = used ? lowerColumn[e] : rows_;
+    lowerValue_[2 * at + std::size_t(e)] = used ? lowerValue[e] : 0.0;
+    if (!used) continue;
+    const std::size_t j = std::size_t(lowerColumn[e]);
+    const double a = lowerValue[e];
+    pivot -= (a * a + tau * a * (upperSum_[j] - a)) / pivot_[j];
+  }
+  if (previous != 0) // (the last lower entry: column i - 1)
+    pivot -= (previous * previous + tau * previous * (upperSum_[at - 1] - previous)) / pivot_[at - 1];
+  double upper = 0;
+  if (next != 0) upper += next; // (the first upper entry)
+  for (int e = 0; e < 2; ++e) {
+    const bool used = e < upperCount;
+    upperColumn_[2 * at + std::size_t(e)] = used ? upperColumn[e] : rows_;
+    upperValue_[2 * at + std::size_t(e)] = used ? upperValue[e] : 0.0;
+    if (used) upper += upperValue[e];
+  }
+  if (!(pivot >= safety * diagonal)) pivot = diagonal;
+  pivot_[at] = pivot;
+  inversePivot_[at] = 1.0 / pivot;
+  previousScaled_[at] = previous / pivot;
+  nextScaled_[at] = next / pivot;
+  upperSum_[at] = upper;
+}
+
+// As solve(PressureSystem): the padded width is the most slots a row uses (a small cement's first steps
+// use fewer than two), the rows repacked to it in place (each row's slots move down, never over one not yet read).
+PressureSolver::Result PressureSolver::solveRows(const double* b, double* x, double tolerance, int maxIterations) {
+  if (usedLower_ == 2 && usedUpper_ == 2) return run<2, 2>(rows_, b, x, tolerance, maxIterations);
+  for (std::size_t i = 0; i < std::size_t(rows_); ++i) {
+    for (std::size_t e = 0; e < std::size_t(usedLower_); ++e) {
+      lowerColumn_[i * std::size_t(usedLower_) + e] = lowerColumn_[2 * i + e];
+      lowerValue_[i * std::size_t(usedLower_) + e] = lowerValue_[2 * i + e];
+    }
+    for (std::size_t e = 0; e < std::size_t(usedUpper_); ++e) {
+      upperColumn_[i * std::size_t(usedUpper_) + e] = upperColumn_[2 * i + e];
+      upperValue_[i * std::size_t(usedUpper_) + e] = upperValue_[2 * i + e];
+    }
+  }
+  lowerWidth_ = usedLower_;
+  upperWidth_ = usedUpper_;
+  return run<-1, -1>(rows_, b, x, tolerance, maxIterations);
 }
 
 // Preconditioned CG (as Eigen's ConjugateGradient), each iteration in four passes over the unknowns: the
@@ -201,9 +271,7 @@ PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const doub
 // the new direction. Its vectors are kept from solve to solve (std::vector: resized, not reallocated, as
 // the cement grows; reallocating ~10 vectors a step cost a twentieth of a run in page faults).
 template <int L, int U>
-PressureSolver::Result PressureSolver::run(const PressureSystem& A, const double* b, double* x, double tolerance,
-                                           int maxIterations) {
-  const int n = A.rows();
+PressureSolver::Result PressureSolver::run(int n, const double* b, double* x, double tolerance, int maxIterations) {
   Result result;
   double rhsNorm2 = 0;
   for (int i = 0; i < n; ++i) rhsNorm2 += b[i] * b[i];
@@ -694,7 +762,6 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   struct Link { std::size_t from, to; double t; VoxelBricks::Cell fromCell, toCell; }; // (cells: no lookups later)
   std::vector<Link> links;
   links.reserve(front_.size() + 64);
-  PressureSystem& A = system_;
   std::vector<double>& b = rhs_;
   std::vector<double>& x = solution_;
   b.resize(std::size_t(unknowns));
@@ -708,13 +775,7 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
   auto assemble = [&]() {
     links.clear();
     std::fill(b.begin(), b.end(), 0.0);
-    A.rowStart.resize(std::size_t(unknowns) + 1);
-    A.diagonal.resize(std::size_t(unknowns));
-    A.column.resize(std::size_t(unknowns) * 7);
-    A.value.resize(std::size_t(unknowns) * 7);
-    int* inner = A.column.data();
-    double* value = A.value.data();
-    int nnz = 0;
+    solver_.startRows(unknowns);
     // Each filled voxel's mobility once (a division), and each face between two filled voxels' transmissibility
     // once: the lower row computes it and keeps it (upperTransmissibility_, per row and axis), the upper row
     // (assembled later: rows go in voxel order) reads it back, and so do the face fluxes.
@@ -726,21 +787,16 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
       rowMobility[row] = mobility(filled_[std::size_t(row)], filledCell_[std::size_t(row)]);
     for (int row = 0; row < unknowns; ++row) {
       const std::size_t c = filled_[std::size_t(row)];
-      A.rowStart[std::size_t(row)] = nnz;
       const VoxelBricks::Cell own = filledCell_[std::size_t(row)];
       x[std::size_t(row)] = own->pressure;
       const auto& v = filledIjk_[std::size_t(row)];
       const double lc = rowMobility[row];
-      double diagonal = 0;
-      int diagonalAt = -1;
+      double diagonal = 0, previous = 0, next = 0;
+      int lowerColumn[2], upperColumn[2], lowerCount = 0, upperCount = 0;
+      double lowerValue[2], upperValue[2];
       // Neighbours in increasing voxel order: -z, -y, -x, (self), +x, +y, +z.
       for (int pass = 0; pass < 7; ++pass) {
-        if (pass == 3) {
-          diagonalAt = nnz;
-          inner[nnz] = row;
-          value[nnz++] = 0;
-          continue;
-        }
+        if (pass == 3) continue;
         const int axis = pass < 3 ? 2 - pass : pass - 4;
         const int sign = pass < 3 ? -1 : 1;
         const int coord = v[std::size_t(axis)] + sign;
@@ -763,8 +819,16 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
             upperT[3 * row + axis] = t;
           }
           diagonal += t;
-          inner[nnz] = other;
-          value[nnz++] = -t;
+          // (a -y or -z neighbour can be the row just before too, a +y or +z one the row just after: no
+          // voxel with cement between them in voxel order; the solver keeps the coupling to rows i -+ 1 apart)
+          if (other == row + sign) (sign < 0 ? previous : next) = -t;
+          else if (sign < 0) {
+            lowerColumn[lowerCount] = other;
+            lowerValue[lowerCount++] = -t;
+          } else {
+            upperColumn[upperCount] = other;
+            upperValue[upperCount++] = -t;
+          }
         } else {
           // Ghost fluid: p_front at f of the way across the front voxel; half a voxel of this one's
           // mobility in series with f of the front voxel's.
@@ -777,18 +841,16 @@ double VoxelDarcyFilling::step(double flowRate, double dtMax, double stopAfter) 
           links.push_back({c, m, t, own, cell});
         }
       }
-      value[diagonalAt] = diagonal;
-      A.diagonal[std::size_t(row)] = diagonalAt;
+      solver_.setRow(row, diagonal, previous, next, lowerCount, lowerColumn, lowerValue, upperCount, upperColumn, upperValue);
       if (filledSourcePore > 0 && c >= source_.front() && c <= source_.back() &&
           std::binary_search(source_.begin(), source_.end(), c))
         b[std::size_t(row)] += flowRate * poreVolume(c) / filledSourcePore;
     }
-    A.rowStart[std::size_t(unknowns)] = nnz;
   };
   double solveSeconds = 0;
   auto solve = [&]() {
     const auto ts = Clock::now();
-    const PressureSolver::Result r = solver_.solve(A, b.data(), x.data(), settings_.solverTolerance, settings_.maxSolverIterations);
+    const PressureSolver::Result r = solver_.solveRows(b.data(), x.data(), settings_.solverTolerance, settings_.maxSolverIterations);
     ++stats_.solves;
     stats_.iterations += std::size_t(r.iterations);
     stats_.worstResidual = std::max(stats_.worstResidual, r.relativeResidual);

@@ -106,6 +106,16 @@ public:
   // The same on arrays of A.rows() values (x: the guess, then the solution).
   Result solve(const PressureSystem& A, const double* b, double* x, double tolerance, int maxIterations);
 
+  // The voxels' 7-point system written straight into the solver, row after row in order (the filling's
+  // assembly: no compressed rows in between), the MIC(0) factor made as the rows come; then solveRows. A
+  // row: its diagonal, its couplings to rows i - 1 and i + 1 (0: none), and at most two other lower and two
+  // other upper couplings, columns in increasing order. The same arithmetic, in the same order, as
+  // solve(PressureSystem) on the same matrix.
+  void startRows(int n);
+  void setRow(int i, double diagonal, double previous, double next, int lowerCount, const int* lowerColumn,
+              const double* lowerValue, int upperCount, const int* upperColumn, const double* upperValue);
+  Result solveRows(const double* b, double* x, double tolerance, int maxIterations);
+
 private:
   void pad(const PressureSystem& A); // the padded copy and its MIC(0) factor
   template <int L, int U> double multiplyPadded(const double* x, double* y, int n) const; // y = A x; returns x . y
@@ -113,8 +123,8 @@ private:
   template <int L, int U>
   double updateAndForward(double alpha, double* x, const double* p, double* r, const double* q, double* z, int n) const;
   template <int L, int U> double backward(const double* r, double* z, int n) const; // its backward sweep; returns r . z
-  template <int L, int U>
-  Result run(const PressureSystem& A, const double* b, double* x, double tolerance, int maxIterations);
+  template <int L, int U> Result run(int n, const double* b, double* x, double tolerance, int maxIterations);
+  int rows_ = 0, usedLower_ = 0, usedUpper_ = 0; // startRows' n; the most lower and upper slots a row used
   std::vector<double> pivot_, inversePivot_, previousScaled_, nextScaled_, upperSum_, r_, z_, p_, q_;
   int lowerWidth_ = 0, upperWidth_ = 0;
   std::vector<int> lowerColumn_, upperColumn_;
@@ -424,7 +434,6 @@ private:
   std::vector<std::array<int, 3>> mergedIjk_;
   bool uniformViscosity_ = true; // every voxel's viscosity is viscosityValue_ (setViscosity)
   double viscosityValue_ = 1.0;
-  PressureSystem system_;
   PressureSolver solver_;
   std::vector<double> rhs_, solution_; // the system's right-hand side and the solve's guess, then solution
   // The assembly's per-row mobility and, per row and axis, the transmissibility of the face to the filled
