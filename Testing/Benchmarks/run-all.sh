@@ -278,11 +278,15 @@ if want("particles") and not QUICK:
     # engine's CPU growth exponent between them is reported with the 5 ml ratio it implies (marked as such);
     # PARTICLE_VOLUMES=1,5 measures 5 ml itself.
     pvols = [float(x) for x in os.environ.get("PARTICLE_VOLUMES", "0.5,1").split(",") if x.strip()]
-    rows = ["| volume | engine | wall (s) | CPU (s) | steps | pressure solves | CG iterations per solve | solve (s) | tip pressure (Pa) |", "|---|---|---|---|---|---|---|---|---|"]
-    res = {(vol, e): [] for vol in pvols for e in ("voxel-darcy", "particle-darcy")}
+    # Every engine of README's model table against the voxel one (ENGINES=... for fewer).
+    engines = [e for e in os.environ.get("ENGINES", "voxel-darcy,particle-darcy,incompressible,equation-of-state").split(",") if e]
+    if "voxel-darcy" not in engines:
+        engines.insert(0, "voxel-darcy")
+    rows = ["| volume | engine | wall (s) | CPU (s) | CPU / voxel-darcy | steps | pressure solves | CG iterations per solve | solve (s) | tip pressure (Pa) |", "|---|---|---|---|---|---|---|---|---|---|"]
+    res = {(vol, e): [] for vol in pvols for e in engines}
     for vol in pvols:
         for rep in range(REPEATS):
-            order = ["voxel-darcy", "particle-darcy"]
+            order = list(engines)
             if rep % 2:
                 order.reverse()
             for engine in order:
@@ -293,14 +297,16 @@ if want("particles") and not QUICK:
                         m = json.load(f)
                     r["step_count"] = m.get("steps", m.get("pressure_solves"))
                 res[(vol, engine)].append(r)
-        for engine in ("voxel-darcy", "particle-darcy"):
+        v = res[(vol, "voxel-darcy")]
+        for engine in engines:
             rs = res[(vol, engine)]
-            rows.append("| %g ml | %s | %s | %s | %s | %s | %s | %s | %s |" % (vol, engine, fmt(med(rs, "wall")), fmt(med(rs, "cpu")), fmt(med(rs, "step_count"), "%.0f"),
-                        fmt(med(rs, "steps"), "%.0f"), fmt(med(rs, "iterations"), "%.1f"), fmt(med(rs, "solve_s")), fmt(med(rs, "tip_pa"), "%.1f")))
-        v, p = res[(vol, "voxel-darcy")], res[(vol, "particle-darcy")]
-        summary.append(("particle-darcy / voxel-darcy, %g ml phantom, 1 thread" % vol, "%s s / %s s CPU" % (fmt(med(p, "cpu")), fmt(med(v, "cpu"))),
-                        "%s x the voxel engine's CPU (target at 5 ml <= 3 x; load %.1f)" % (ratio(med(p, "cpu"), med(v, "cpu")), loads[-1]),
-                        "cementsph inject ... --volume-ml %g --set pressure_model=particle-darcy" % vol))
+            rows.append("| %g ml | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (vol, engine, fmt(med(rs, "wall")), fmt(med(rs, "cpu")), ratio(med(rs, "cpu"), med(v, "cpu")),
+                        fmt(med(rs, "step_count"), "%.0f"), fmt(med(rs, "steps"), "%.0f"), fmt(med(rs, "iterations"), "%.1f"), fmt(med(rs, "solve_s")), fmt(med(rs, "tip_pa"), "%.1f")))
+            if engine == "voxel-darcy":
+                continue
+            summary.append(("%s / voxel-darcy, %g ml phantom, 1 thread" % (engine, vol), "%s s / %s s CPU" % (fmt(med(rs, "cpu")), fmt(med(v, "cpu"))),
+                            "%s x the voxel engine's CPU%s (load %.1f)" % (ratio(med(rs, "cpu"), med(v, "cpu")), " (target at 5 ml <= 3 x)" if engine == "particle-darcy" else "", loads[-1]),
+                            "cementsph inject ... --volume-ml %g --set pressure_model=%s" % (vol, engine)))
     if len(pvols) >= 2 and 5 not in pvols:
         # The voxel engine at 5 ml is cheap (seconds) and is measured; only particle-darcy's 5 ml CPU is extrapolated
         # from its growth exponent (the voxel engine's own exponent at small volumes reflects its fixed costs).
@@ -312,7 +318,7 @@ if want("particles") and not QUICK:
             p5 = phi * (5 / hi) ** ex
             summary.append(("  particle-darcy at 5 ml (extrapolated)", "CPU ~ V^%.2f from %g-%g ml: %.0f s; voxel-darcy 5 ml measured %s s" % (ex, lo, hi, p5, fmt(cv5)),
                             "about %.0f x at 5 ml (extrapolated, not measured)" % (p5 / cv5), "(the rows above; --volume-ml 5 for voxel-darcy)"))
-    details.append("### particle-darcy against voxel-darcy on the bundled phantom, 1 thread (medians of %d interleaved pairs)\n\n%s\n" % (REPEATS, "\n".join(rows)))
+    details.append("### The particle engines against voxel-darcy on the bundled phantom, 1 thread (medians of %d interleaved rounds)\n\n%s\n" % (REPEATS, "\n".join(rows)))
 
 if want("sph"):
     # 6. The SPH engine's step benchmark (built with -DCEMENTSPH_BUILD_BENCHMARKS=ON).
