@@ -775,6 +775,28 @@ private:
     birth_.push_back(time_);
   }
 
+  // The runs of cement (open, occupied voxels) along x over the particles' supports' bounding box (clipped to
+  // the region): the per-particle pass of geometry() skips cement, and jumps over a run at once.
+  void markCementRuns() {
+    const sph::VoxelGrid& g = solid_->grid;
+    int lo[3] = {g.size[0], g.size[1], g.size[2]}, hi[3] = {-1, -1, -1};
+    for (const auto& p : x_) {
+      int l[3], h[3];
+      voxelBox(p, kernel_.support, l, h);
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], l[a]), hi[a] = std::max(hi[a], h[a]);
+    }
+    for (int a = 0; a < 3; ++a) cementLo_[a] = lo[a], cementDim_[a] = std::max(0, hi[a] - lo[a] + 1);
+    const std::size_t nx = std::size_t(cementDim_[0]);
+    cementRun_.assign(nx * std::size_t(cementDim_[1]) * std::size_t(cementDim_[2]), 0);
+    for (int k = 0; k < cementDim_[2]; ++k)
+      for (int j = 0; j < cementDim_[1]; ++j) {
+        const std::size_t row = g.index(lo[0], lo[1] + j, lo[2] + k);
+        std::uint8_t* run = cementRun_.data() + nx * (std::size_t(j) + std::size_t(cementDim_[1]) * std::size_t(k));
+        for (std::size_t i = nx; i-- > 0;) // past the box's end no support reaches: a run ends there
+          if (!closed_[row + i] && occupied_[row + i]) run[i] = std::uint8_t(i + 1 < nx && run[i + 1] ? std::min(run[i + 1] + 1, 255) : 1);
+      }
+  }
+
   // The cell list, neighbour pairs (i < j) with F/r, and each particle's ghost and closed-voxel sums.
   void geometry() {
     const auto t0 = std::chrono::steady_clock::now();
@@ -844,6 +866,7 @@ private:
             }
     };
     stamp(tip_, sourceRadius_);
+    markCementRuns();
     // Per particle: the ghost (open, empty) voxels' Laplacian weight, gradient sums, shift sums.
     ghostF_.assign(n, 0.0);
     ghostB_.assign(n, Eigen::Matrix3d::Zero());
@@ -901,10 +924,19 @@ private:
           const bool rowInside = zInside && j >= 0 && j < g.size[1];
           const std::uint8_t* closedRow = closedPad_.data() + paddedIndex(0, j, k);
           const std::size_t row = rowInside ? g.index(0, j, k) : 0; // an open voxel lies in the region
+          // Cement is skipped (the particles' own sums), a run of it at once (markCementRuns): the same sums in
+          // the same order. An open voxel lies in the region and in the runs' box.
+          const std::uint8_t* runRow =
+              rowInside ? cementRun_.data() + std::size_t(cementDim_[0]) * (std::size_t(j - cementLo_[1]) +
+                                                                           std::size_t(cementDim_[1]) * std::size_t(k - cementLo_[2]))
+                        : nullptr;
           for (int ii = i0; ii <= i1; ++ii) {
             const bool closed = closedRow[ii] != 0;
             const std::size_t v = row + std::size_t(ii);
-            if (!closed && occupied_[v]) continue; // cement: the particles' own sums
+            if (!closed && runRow[ii - cementLo_[0]]) {
+              ii += runRow[ii - cementLo_[0]] - 1;
+              continue;
+            }
             const double rx = (g.origin[0] + g.spacing[0] * ii) - p[0];
             const double r2 = rx * rx + ry2 + rz2;
             if (r2 >= cs2 || r2 == 0) continue; // outside the support: no square root
@@ -1350,6 +1382,10 @@ private:
   };
   std::vector<std::uint8_t> closedPad_;
   std::vector<std::int32_t> closedSum_; // the closed voxels' summed-volume table over the padded grid (closedInBox)
+  // Over the box cementLo_ + [0, cementDim_) about the particles, rebuilt every step (markCementRuns): per open
+  // occupied voxel the steps along +x to the next voxel that is not (at most 255), 0 elsewhere.
+  std::vector<std::uint8_t> cementRun_;
+  int cementLo_[3] = {0, 0, 0}, cementDim_[3] = {0, 0, 0};
   // The ghosts' sight tables (ghostHidden): offset numbering, per region voxel its table's slot (-1: none yet).
   int sightM_ = 0, sightEntries_ = 0;
   std::vector<int> sightIndex_;
