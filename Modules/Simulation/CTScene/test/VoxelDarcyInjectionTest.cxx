@@ -20,6 +20,7 @@
 #include <itkImageRegionConstIteratorWithIndex.h>
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
+#include <vtkFieldData.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkXMLPolyDataReader.h>
@@ -27,6 +28,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -170,8 +172,9 @@ TEST(VoxelDarcyInjection, EverySnapshotFileHoldsTheVolumeInjectedAtItsTime) {
   pvd << pvdFile.rdbuf();
   const std::string text = pvd.str();
   const std::regex entry("timestep=\"([^\"]+)\" part=\"0\" file=\"([^\"]+)\"");
-  std::size_t files = 0;
+  std::size_t files = 0, filesWithVelocity = 0;
   vtkIdType previousPoints = 0;
+  const auto entries = std::size_t(std::distance(std::sregex_iterator(text.begin(), text.end(), entry), std::sregex_iterator()));
   for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it, ++files) {
     const double t = std::stod((*it)[1]);
     const std::string name = (*it)[2];
@@ -191,10 +194,20 @@ TEST(VoxelDarcyInjection, EverySnapshotFileHoldsTheVolumeInjectedAtItsTime) {
     double mm3 = 0;
     for (vtkIdType i = 0; i < n; ++i) mm3 += volume->GetTuple1(i);
     EXPECT_NEAR(mm3, flowMm3PerS * t, 1e-6 * flowMm3PerS * t) << name << " at " << t << " s";
-    // The cement's own velocity is the Darcy flux over the porosity (float arrays: 1e-6 relative).
+    // One vertex cell per point, point i in cell i.
+    ASSERT_EQ(poly->GetNumberOfCells(), n) << name;
+    ASSERT_EQ(poly->GetVerts()->GetNumberOfCells(), n) << name;
+    EXPECT_EQ(poly->GetCellType(n - 1), VTK_VERTEX) << name;
+    EXPECT_EQ(poly->GetVerts()->GetConnectivityArray()->GetTuple1(n - 1), double(n - 1)) << name;
+    // The cement's own velocity is the Darcy flux over the porosity (float arrays: 1e-6 relative), in the files
+    // that hold both: the last one (the earlier ones leave them out, issue 23; the next test checks that).
     auto *q = poly->GetPointData()->GetArray("darcy_velocity_m_per_s"), *v = poly->GetPointData()->GetArray("velocity_m_per_s"),
          *phi = poly->GetPointData()->GetArray("porosity");
-    ASSERT_TRUE(q && v && phi) << name;
+    ASSERT_NE(q, nullptr) << name;
+    ASSERT_EQ(v == nullptr, phi == nullptr) << name;
+    if (!v) continue;
+    ++filesWithVelocity;
+    EXPECT_EQ(files + 1, entries) << name << ": only the last snapshot holds velocity_m_per_s and porosity";
     double worst = 0;
     for (vtkIdType i = 0; i < n; ++i)
       for (int a = 0; a < 3; ++a) {
@@ -202,26 +215,36 @@ TEST(VoxelDarcyInjection, EverySnapshotFileHoldsTheVolumeInjectedAtItsTime) {
         worst = std::max(worst, std::abs(v->GetComponent(i, a) - expected) / std::max(std::abs(expected), 1e-12));
       }
     EXPECT_LT(worst, 1e-6) << name;
-    // One vertex cell per point, point i in cell i.
-    ASSERT_EQ(poly->GetNumberOfCells(), n) << name;
-    ASSERT_EQ(poly->GetVerts()->GetNumberOfCells(), n) << name;
-    EXPECT_EQ(poly->GetCellType(n - 1), VTK_VERTEX) << name;
-    EXPECT_EQ(poly->GetVerts()->GetConnectivityArray()->GetTuple1(n - 1), double(n - 1)) << name;
   }
   EXPECT_EQ(files, 24u); // at 0.25, 0.5, ..., 5.75 s and the end (6 s)
+  EXPECT_EQ(filesWithVelocity, 1u);
 }
 
 TEST(VoxelDarcyInjection, TheEarlierSnapshotsLeaveOutOnlyWhatTheLastOneAndTheirOwnArraysGive) {
   // 0.3 ml in 6 s, a snapshot every 2 s: particles_0000 (2 s), 0001 (4 s), 0002 (the end, 6 s). The earlier
-  // ones hold no fill_fraction, permeability_m2 or arrival_time_s (issue 23: a fifth of a snapshot's bytes);
-  // the last holds every array. What they leave out is there: every voxel of an earlier snapshot is in the last
-  // with the same position, its arrival there is its snapshot's time minus its age then (float age_s: 1e-5 s),
-  // and its fill is cement_volume_mm3 / (porosity x voxel volume) with the voxel's 0.5 mm edge.
+  // ones hold no fill_fraction, permeability_m2, arrival_time_s, porosity, velocity_m_per_s or
+  // density_kg_per_m3 point array (issue 23: two fifths of a snapshot's bytes); the last holds every array.
+  // What they leave out is there: every voxel of an earlier snapshot is in the last with the same position, its
+  // arrival there is its snapshot's time minus its age then (float age_s: 1e-5 s), its fill is
+  // cement_volume_mm3 / (the last one's porosity x voxel volume) with the voxel's 0.5 mm edge, its velocity is
+  // its darcy_velocity_m_per_s over that porosity, and its density the field-data value density_kg_per_m3 every
+  // snapshot holds, which is the last one's density at every point (incompressible).
   const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "voxel-darcy-reduced-snapshots";
   run(100.0, out, 2.0);
   const auto last = imaging::readPolyData((out / "particles_0002.vtp").string());
-  for (const char* name : {"fill_fraction", "permeability_m2", "arrival_time_s", "age_s", "cement_volume_mm3"})
-    ASSERT_NE(last->GetPointData()->GetArray(name), nullptr) << name;
+  vtkPointData* lastData = last->GetPointData();
+  for (const char* name : {"fill_fraction", "permeability_m2", "arrival_time_s", "age_s", "cement_volume_mm3", "porosity",
+                           "velocity_m_per_s", "density_kg_per_m3", "pressure_pa", "darcy_velocity_m_per_s", "viscosity_pa_s"})
+    ASSERT_NE(lastData->GetArray(name), nullptr) << name;
+  auto rho0 = [](vtkPolyData* poly) {
+    vtkDataArray* a = poly->GetFieldData()->GetArray("density_kg_per_m3");
+    return a && a->GetNumberOfTuples() == 1 ? a->GetTuple1(0) : -1.0;
+  };
+  const double density = lastData->GetArray("density_kg_per_m3")->GetTuple1(0);
+  EXPECT_GT(density, 0.0);
+  for (vtkIdType i = 0; i < last->GetNumberOfPoints(); ++i)
+    ASSERT_EQ(lastData->GetArray("density_kg_per_m3")->GetTuple1(i), density) << "point " << i;
+  EXPECT_NEAR(rho0(last), density, 1e-4 * density);
   auto key = [](const double* x) {
     return std::to_string(std::lround(x[0] * 1e3)) + "," + std::to_string(std::lround(x[1] * 1e3)) + "," +
            std::to_string(std::lround(x[2] * 1e3));
@@ -232,21 +255,29 @@ TEST(VoxelDarcyInjection, TheEarlierSnapshotsLeaveOutOnlyWhatTheLastOneAndTheirO
   for (const auto& [file, t] : {std::pair<const char*, double>{"particles_0000.vtp", 2.0}, {"particles_0001.vtp", 4.0}}) {
     const auto poly = imaging::readPolyData((out / file).string());
     vtkPointData* d = poly->GetPointData();
-    for (const char* name : {"fill_fraction", "permeability_m2", "arrival_time_s"})
+    for (const char* name : {"fill_fraction", "permeability_m2", "arrival_time_s", "porosity", "velocity_m_per_s",
+                             "density_kg_per_m3"})
       EXPECT_EQ(d->GetArray(name), nullptr) << file << " " << name;
-    auto *age = d->GetArray("age_s"), *volume = d->GetArray("cement_volume_mm3"), *phi = d->GetArray("porosity");
-    ASSERT_TRUE(age && volume && phi) << file;
+    EXPECT_EQ(d->GetNumberOfArrays(), 5) << file; // the five below
+    for (const char* name : {"pressure_pa", "viscosity_pa_s"}) EXPECT_NE(d->GetArray(name), nullptr) << file << " " << name;
+    EXPECT_NEAR(rho0(poly), density, 1e-4 * density) << file;
+    auto *age = d->GetArray("age_s"), *volume = d->GetArray("cement_volume_mm3"), *q = d->GetArray("darcy_velocity_m_per_s");
+    ASSERT_TRUE(age && volume && q) << file;
     ASSERT_GT(poly->GetNumberOfPoints(), 100) << file;
-    double worstArrival = 0;
+    double worstArrival = 0, fastest = 0;
     for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
       const auto at = inLast.find(key(poly->GetPoint(i)));
       ASSERT_NE(at, inLast.end()) << file << " point " << i;
-      const double arrival = last->GetPointData()->GetArray("arrival_time_s")->GetTuple1(at->second);
+      const double arrival = lastData->GetArray("arrival_time_s")->GetTuple1(at->second);
       worstArrival = std::max(worstArrival, std::abs(t - age->GetTuple1(i) - arrival));
-      const double fill = volume->GetTuple1(i) / (phi->GetTuple1(i) * voxelMm3);
+      const double phi = lastData->GetArray("porosity")->GetTuple1(at->second);
+      ASSERT_GT(phi, 0.0) << file << " point " << i;
+      const double fill = volume->GetTuple1(i) / (phi * voxelMm3);
       EXPECT_GT(fill, 0.0) << file << " point " << i;
       EXPECT_LE(fill, 1.0 + 1e-6) << file << " point " << i;
+      fastest = std::max(fastest, std::abs(q->GetComponent(i, 0) / phi));
     }
     EXPECT_LT(worstArrival, 1e-5) << file;
+    EXPECT_GT(fastest, 0.0) << file; // the cement still moves: the velocities were there to leave out
   }
 }

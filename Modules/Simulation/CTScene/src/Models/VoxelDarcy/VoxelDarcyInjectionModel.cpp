@@ -3,7 +3,10 @@
 // (particles_NNNN.vtp) are one per voxel that holds cement (its centre, mm, the CT's frame) with fill_fraction,
 // cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s, porosity, permeability_m2,
 // arrival_time_s, age_s, and as the particles' arrays velocity_m_per_s (the interstitial velocity q / phi) and
-// density_kg_per_m3 (rho0: incompressible). Also cement_labels.nrrd: a label map on the simulated CT's grid (1
+// density_kg_per_m3 (rho0: incompressible), all of them in the last snapshot and the run's result; the snapshots
+// before the last hold the points, cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s and
+// age_s (the rest follows from the last one: cementVoxelsToPolyData), and every snapshot rho0 as the field-data
+// value density_kg_per_m3. Also cement_labels.nrrd: a label map on the simulated CT's grid (1
 // cement in bone, 2 leaked cement), which `cementsph inject` draws as cement_slices.png (leaks in red) and 3D
 // Slicer opens as a segmentation.
 //
@@ -86,6 +89,7 @@
 #include <itkSignedMaurerDistanceMapImageFilter.h>
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkTypeInt32Array.h>
 #include <vtkPointData.h>
@@ -243,10 +247,13 @@ struct SnapshotBuffers {
   std::vector<VoxelDarcyFilling::VoxelState> states;
 };
 
-// One point per voxel holding cement. `whole`: every array; else (the snapshots during the run, issue 23) not
-// the three that the last snapshot holds for every voxel of every earlier one or that the others give:
-// arrival_time_s and permeability_m2 never change once a voxel has cement, and fill_fraction is
-// cement_volume_mm3 / (porosity x the voxel's volume). A fifth of the bytes a snapshot's writing compresses.
+// One point per voxel holding cement. `whole`: every array; else (the snapshots during the run, issue 23) the
+// points, their vertex cells, cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s and age_s,
+// without the six that the last snapshot holds for every voxel of every earlier one or that the others give:
+// arrival_time_s, permeability_m2 and porosity never change once a voxel has cement, fill_fraction is
+// cement_volume_mm3 / (porosity x the voxel's volume), velocity_m_per_s is darcy_velocity_m_per_s / porosity
+// and density_kg_per_m3 is the rest density (incompressible), which every snapshot holds as a field-data value
+// of that name. Two fifths of the bytes a snapshot's writing compresses.
 vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity,
                                                     SnapshotBuffers& buffers, bool whole) {
   const VoxelMedium& m = f.medium();
@@ -286,7 +293,8 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
        viscosity = floats("viscosity_pa_s"), porosity = floats("porosity"), permeability = floats("permeability_m2"),
        arrival = floats("arrival_time_s"), age = floats("age_s"), speed = floats("velocity_m_per_s", 3),
        density = floats("density_kg_per_m3");
-  for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, permeability, arrival}) a->SetNumberOfTuples(nWhole);
+  const std::initializer_list<vtkDataArray*> wholeOnly{fill, permeability, arrival, porosity, speed, density};
+  for (vtkDataArray* a : wholeOnly) a->SetNumberOfTuples(nWhole);
   float* xyz = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0);
   double *fillOut = fill->GetPointer(0), *volumeOut = volume->GetPointer(0);
   float *pressureOut = pressure->GetPointer(0), *velocityOut = velocity->GetPointer(0),
@@ -310,16 +318,14 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     volumeOut[i] = s.fill * m.porosity[c] * m.voxelVolume() * 1e9;
     pressureOut[i] = float(s.pressure);
     const Eigen::Vector3d& q = s.darcyVelocity;
-    const Eigen::Vector3d v = q / double(m.porosity[c]); // the cement's own (interstitial) velocity
-    for (int a = 0; a < 3; ++a) {
-      velocityOut[3 * i + a] = float(q[a]);
-      speedOut[3 * i + a] = float(v[a]);
-    }
-    densityOut[i] = float(restDensity);
+    for (int a = 0; a < 3; ++a) velocityOut[3 * i + a] = float(q[a]);
     viscosityOut[i] = float(s.viscosity);
-    porosityOut[i] = m.porosity[c];
     ageOut[i] = float(f.time() - s.arrival);
     if (whole) {
+      const Eigen::Vector3d v = q / double(m.porosity[c]); // the cement's own (interstitial) velocity
+      for (int a = 0; a < 3; ++a) speedOut[3 * i + a] = float(v[a]);
+      densityOut[i] = float(restDensity);
+      porosityOut[i] = m.porosity[c];
       fillOut[i] = s.fill;
       permeabilityOut[i] = float(m.permeability[c]);
       arrivalOut[i] = float(s.arrival);
@@ -335,7 +341,11 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
   poly->SetVerts(verts);
   for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, volume, pressure, velocity, viscosity, porosity,
                                                                permeability, arrival, age, speed, density})
-    if (whole || a->GetNumberOfTuples() == n) poly->GetPointData()->AddArray(a);
+    if (whole || std::find(wholeOnly.begin(), wholeOnly.end(), a) == wholeOnly.end()) poly->GetPointData()->AddArray(a);
+  auto rho0 = vtkSmartPointer<vtkDoubleArray>::New(); // the rest density, for the files without the point array
+  rho0->SetName("density_kg_per_m3");
+  rho0->InsertNextValue(restDensity);
+  poly->GetFieldData()->AddArray(rho0);
   return poly;
 }
 
