@@ -134,11 +134,11 @@ void InjectionWriter::stopWriting() noexcept {
   if (writerThread_.joinable()) writerThread_.join();
 }
 
-void InjectionWriter::snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow) {
+void InjectionWriter::snapshot(double time, vtkSmartPointer<vtkPolyData> particles, const imaging::ImageType* ctNow) {
   if (!writing()) return;
   char name[64];
   std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots_.size());
-  queueParticles(particles, (fs::path(outDir_) / name).string());
+  queueParticles(std::move(particles), (fs::path(outDir_) / name).string());
   if (ctSnapshots_) {
     char ctName[64];
     std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots_.size());

@@ -60,8 +60,12 @@ public:
   // ends, the destructor removes it with the snapshots, so a failed run leaves no mix of its files and an earlier
   // run's (README "Bad input", Outputs). Call it before the file is written.
   std::string fileOfThisRun(const std::string& name);
-  // particles_NNNN.vtp (and simulated_ct_NNNN.nrrd: `ctNow` if given, else made) at time [s].
-  void snapshot(double time, vtkPolyData* particles, const imaging::ImageType* ctNow = nullptr);
+  // particles_NNNN.vtp (and simulated_ct_NNNN.nrrd: `ctNow` if given, else made) at time [s]. Give it the only
+  // reference to `particles` (a moved smart pointer) while the run goes on: a reference the caller drops while
+  // the writer thread writes runs VTK's garbage collector on the same objects from two threads (a crash in
+  // vtkGarbageCollector::Collect, about 1 run in 40 of 5 ml, issue 23). The last one (finish) is written while
+  // the caller waits, so that one may stay the caller's.
+  void snapshot(double time, vtkSmartPointer<vtkPolyData> particles, const imaging::ImageType* ctNow = nullptr);
   // The last snapshot (the final state), particles.pvd, tip_pressure.csv, simulated_ct.nrrd, scene.json,
   // sequence.json, the text files (name, content) given, then metrics.json (with the snapshot counts added).
   // simulatedCt: on the region (the last frame of the X-ray series); simulatedCtFile: simulated_ct.nrrd (the
