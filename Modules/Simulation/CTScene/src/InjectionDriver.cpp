@@ -275,9 +275,6 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   choice.model = entry.description;
   setup.choice = &choice;
   setup.model.pressureModel = choice.pressureModel;
-  // The voxel engine reads the solid mask only: the kept solid voxels' centres (24 bytes each, over a million on
-  // a whole-scan region) and their region-sized pass are the particle engines' (issue 23).
-  if (choice.pressureModel != "voxel-darcy") keepSolidNearPores(solid, po.reachMm);
   if (o.progress) std::cerr << "inject: model " << choice.model << ": " << choice.reason << "\n";
   if (o.progress) std::cerr << "inject: bone " << bone.model << ": " << bone.reason << "\n";
   // Keys the user set that this engine does not read: never ignored silently. Printed with the progress lines
@@ -287,6 +284,9 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
     for (const std::string& w : unreadKeys) std::cerr << "inject: warning: " << w << "\n";
 
   std::unique_ptr<InjectionModel> model = entry.make();
+  // The kept solid voxels' centres (24 bytes each, over a million on a whole-scan region) and their region-sized
+  // pass only for an engine that reads them (issue 23): the voxel engine reads the solid mask only.
+  if (model->readsKeptSolidCentres()) keepSolidNearPores(solid, po.reachMm);
   model->start(setup);
   if (o.checkOnly) return InjectionResult{};
 

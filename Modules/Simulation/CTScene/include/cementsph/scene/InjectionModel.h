@@ -134,6 +134,10 @@ class InjectionModel {
 public:
   virtual ~InjectionModel() = default;
   // Sets the engine up; std::invalid_argument (one line naming the scene key) for a scene it cannot run.
+  // Whether start() reads the solid's kept voxel centres (PorousSolid::keptPositions: 24 bytes a kept voxel and a
+  // region-sized pass, made by the driver only for an engine that asks). The particle engines place fixed
+  // particles there; an engine that reads the solid mask only says false.
+  virtual bool readsKeptSolidCentres() const { return true; }
   virtual void start(const InjectionSetup& setup) = 0;
   virtual double time() const = 0;                        // simulated [s]
   // The run ends once time() >= T (1 - endSlack()): an engine that steps exactly to T (the voxel model) allows

@@ -352,6 +352,7 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
 // The voxel-grid Darcy filling as an injection engine.
 class VoxelDarcyInjectionModel final : public InjectionModel {
 public:
+  bool readsKeptSolidCentres() const override { return false; } // the solid mask only
   void start(const InjectionSetup& in) override {
     const SceneConfig& scene = *in.scene;
     scene_ = &scene;
