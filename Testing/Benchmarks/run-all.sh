@@ -307,7 +307,7 @@ if want("particles") and not QUICK:
             summary.append(("%s / voxel-darcy, %g ml phantom, 1 thread" % (engine, vol), "%s s / %s s CPU" % (fmt(med(rs, "cpu")), fmt(med(v, "cpu"))),
                             "%s x the voxel engine's CPU%s (load %.1f)" % (ratio(med(rs, "cpu"), med(v, "cpu")), " (target at 5 ml <= 3 x)" if engine == "particle-darcy" else "", loads[-1]),
                             "cementsph inject ... --volume-ml %g --set pressure_model=%s" % (vol, engine)))
-    if len(pvols) >= 2 and 5 not in pvols:
+    if len(pvols) >= 2 and 5 not in pvols and "particle-darcy" in engines:
         # The voxel engine at 5 ml is cheap (seconds) and is measured; only particle-darcy's 5 ml CPU is extrapolated
         # from its growth exponent (the voxel engine's own exponent at small volumes reflects its fixed costs).
         lo, hi = pvols[0], pvols[-1]

@@ -156,13 +156,18 @@ std::string elastixMapWith(const std::vector<std::pair<std::string, std::string>
 
 // Tighter maps than the default, for elastix's speed against its error (the default map stops far from the
 // optimum on these pairs: 2026-12-04, the normalised correlation with 2000 iterations reached 0.005 mm).
-const std::vector<std::pair<std::string, std::string>> kTighterElastixMaps = {
+// Made when first asked for (a function, not a namespace-scope table: a wrong entry name throws in the run, not
+// before main).
+const std::vector<std::pair<std::string, std::string>>& tighterElastixMaps() {
+  static const std::vector<std::pair<std::string, std::string>> maps = {
     {"normalised correlation, 1000 iterations, 2048 samples",
      elastixMapWith({{"Metric", "\"AdvancedNormalizedCorrelation\""}, {"MaximumNumberOfIterations", "1000"}})},
     {"normalised correlation, 2000 iterations, 8192 samples",
      elastixMapWith({{"Metric", "\"AdvancedNormalizedCorrelation\""}, {"MaximumNumberOfIterations", "2000"},
                      {"NumberOfSpatialSamples", "8192"}})},
-};
+  };
+  return maps;
+}
 
 void runElastix(const fs::path& dir, const ImageType* fixed, const ImageType* moving,
                 const RegistrationCase& c, std::string& time, std::string& tre, const std::string& map = "") {
@@ -241,11 +246,11 @@ void benchRegistration(const fs::path& work, unsigned n, double spacing, int pai
                                               {1, 0, 0, 0, 1, 0, 0, 0, 1}, 11u + static_cast<unsigned>(i));
       runElastix(work / ("pair" + std::to_string(i) + "-clean"), clean.fixed, clean.moving, clean, cleanTime,
                  cleanTre);
-      for (std::size_t m = 0; m < kTighterElastixMaps.size() && gElastixMap.empty(); ++m) {
+      for (std::size_t m = 0; m < tighterElastixMaps().size() && gElastixMap.empty(); ++m) {
         std::string t = "n/a", e = "n/a";
         runElastix(work / ("pair" + std::to_string(i) + "-map" + std::to_string(m + 1)), c.fixed, c.moving, c, t, e,
-                   kTighterElastixMaps[m].second);
-        tighter.push_back("| " + std::to_string(i + 1) + " | " + kTighterElastixMaps[m].first + " | " + t + " | " + e + " |");
+                   tighterElastixMaps()[m].second);
+        tighter.push_back("| " + std::to_string(i + 1) + " | " + tighterElastixMaps()[m].first + " | " + t + " | " + e + " |");
       }
     }
     char row[400];

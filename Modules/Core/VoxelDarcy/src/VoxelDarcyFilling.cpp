@@ -198,6 +198,7 @@ PressureSolver::Result PressureSolver::solve(const PressureSystem& A, const doub
 
 void PressureSolver::startRows(int n) {
   rows_ = n;
+  rowsPacked_ = false;
   lowerWidth_ = upperWidth_ = 2;
   usedLower_ = usedUpper_ = 0;
   for (std::vector<double>* v : {&previous_, &next_, &diagonalValue_, &pivot_, &inversePivot_, &previousScaled_,
@@ -251,7 +252,8 @@ void PressureSolver::setRow(int i, double diagonal, double previous, double next
 // use fewer than two), the rows repacked to it in place (each row's slots move down, never over one not yet read).
 PressureSolver::Result PressureSolver::solveRows(const double* b, double* x, double tolerance, int maxIterations) {
   if (usedLower_ == 2 && usedUpper_ == 2) return run<2, 2>(rows_, b, x, tolerance, maxIterations);
-  for (std::size_t i = 0; i < std::size_t(rows_); ++i) {
+  // Once per startRows: a second solve of the same rows (another right-hand side) finds them packed already.
+  for (std::size_t i = 0; i < std::size_t(rows_) && !rowsPacked_; ++i) {
     for (std::size_t e = 0; e < std::size_t(usedLower_); ++e) {
       lowerColumn_[i * std::size_t(usedLower_) + e] = lowerColumn_[2 * i + e];
       lowerValue_[i * std::size_t(usedLower_) + e] = lowerValue_[2 * i + e];
@@ -261,6 +263,7 @@ PressureSolver::Result PressureSolver::solveRows(const double* b, double* x, dou
       upperValue_[i * std::size_t(usedUpper_) + e] = upperValue_[2 * i + e];
     }
   }
+  rowsPacked_ = true;
   lowerWidth_ = usedLower_;
   upperWidth_ = usedUpper_;
   return run<-1, -1>(rows_, b, x, tolerance, maxIterations);

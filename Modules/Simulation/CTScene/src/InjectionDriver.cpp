@@ -300,7 +300,12 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
                           {"cement_volume_ml", model->cementVolumeM3() * 1e6}};
   };
   detail::InjectionWriter writer(o.outDir, scene, hu,
-                                 [&] { return simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0); },
+                                 [&] {
+                                   // The engine is freed before finish() (its CT comes with it then): a frame made
+                                   // after that is a programming error, said, not a null dereference.
+                                   if (!model) throw std::logic_error("inject: a simulated CT frame asked for after the engine ended");
+                                   return simulatedCtOnRoi(ct, solid, model->cementDensity(), hu, rho0);
+                                 },
                                  o.onCtFrame);
 
   // The loop: steps of at most the time to the next snapshot or the end.
@@ -387,6 +392,11 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
     if (!o.cropToRegion && !isInputGrid(input, result.simulatedCt)) {
       result.simulatedCtFile = pasteOntoInputGrid(input, result.simulatedCt, result.regionCt);
       if (result.cementLabels) result.cementLabelsFile = labelsOnInputGrid(input, result.cementLabels);
+    } else if (!o.cropToRegion) {
+      // The input's origin to the bit (the region's went mm -> m -> mm, within 1e-6 of a voxel: isInputGrid), as
+      // the paste's copy of the input's geometry gave it: the files' headers say what the input's say.
+      result.simulatedCt->SetOrigin(input->GetOrigin());
+      if (result.cementLabels) result.cementLabels->SetOrigin(input->GetOrigin());
     }
     // The anatomy on the same grid as the simulated CT's file.
     if (anatomyOnRegion) result.anatomyLabelsFile = labelsOnInputGrid(result.simulatedCtFile, anatomyOnRegion);

@@ -180,6 +180,8 @@ TEST(ParticleDarcy, SphericalInjectionInAUniformMedium) {
   std::printf("sub-steps %s, clamped %s, sub-step moves capped %s\n", m.at("sub_steps").dump().c_str(),
               m.at("sub_steps_clamped").dump().c_str(), m.at("sub_step_moves_capped").dump().c_str());
   EXPECT_GT(m.at("sub_steps").get<std::size_t>(), 0u);
+  // A guard, 0 by construction since the macro step is bounded by the fastest Darcy speed (the unit test
+  // ParticleDarcyStepping.TheMacroStepBoundsTheFastestDarcyMoveBySubSteps is the check that can fail).
   EXPECT_EQ(m.at("sub_steps_clamped").get<std::size_t>(), 0u);
   for (const auto& h : m["volume_history"]) {
     const double injected = h["volume_injected_ml"].get<double>(), held = h["cement_volume_ml"].get<double>();

@@ -127,6 +127,7 @@ private:
   int rows_ = 0, usedLower_ = 0, usedUpper_ = 0; // startRows' n; the most lower and upper slots a row used
   std::vector<double> pivot_, inversePivot_, previousScaled_, nextScaled_, upperSum_, r_, z_, p_, q_;
   int lowerWidth_ = 0, upperWidth_ = 0;
+  bool rowsPacked_ = false; // solveRows repacked the rows to the used widths (a second solveRows must not again)
   std::vector<int> lowerColumn_, upperColumn_;
   std::vector<double> lowerValue_, upperValue_, diagonalValue_, previous_, next_; // a_i,i-1 and a_i,i+1 (or 0)
 };

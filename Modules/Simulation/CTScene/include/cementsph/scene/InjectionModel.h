@@ -158,6 +158,8 @@ public:
   virtual std::vector<double> cementDensity() const = 0;
   // The cement as points (mm, the CT's frame) with the engine's point arrays (particles_NNNN.vtp). A new
   // object on each call, not kept or changed by the engine afterwards: the driver writes it on another thread.
+  // Before finish() an engine may give a reduced array set (the voxel engine's snapshots during the run: what the
+  // last one, after finish(), holds for every point, docs/scene-figures.md); after finish(), every array.
   virtual vtkSmartPointer<vtkPolyData> cement() const = 0;
   // The state at the end: stopped, the driver stopped it early.
   virtual void finish(bool stopped) { (void)stopped; }
