@@ -9,6 +9,13 @@
 namespace cementsph::imaging {
 
 void writePolyData(vtkPolyData* surface, const std::string& path);
+// The same VTK XML PolyData file, its arrays appended raw and uncompressed, written by us in one pass: for the
+// injection's snapshots (a 5 ml run writes a hundred), where VTK's writer cost about 3x the file system's own
+// time per byte and LZ4 saved a tenth of the bytes of single-precision fields (issue 23, BENCHMARKS.md). VTK's
+// reader and ParaView read it as any .vtp (PolyDataWriterTest reads it back with vtkXMLPolyDataReader). It
+// takes points, the four cell arrays and numeric point, cell and field data in VTK's standard memory layout;
+// anything else (a string array, an implicit array) is written by writePolyData instead.
+void writePolyDataUncompressed(vtkPolyData* points, const std::string& path);
 vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path);
 
 } // namespace cementsph::imaging

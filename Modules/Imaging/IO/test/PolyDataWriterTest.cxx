@@ -1,0 +1,182 @@
+// The snapshots' own VTP writer (PolyDataIO.h, writePolyDataUncompressed) against VTK's reader: every value it
+// wrote must come back from vtkXMLPolyDataReader, an independent implementation of the format, bit for bit.
+#include "cementsph/imaging/PolyDataIO.h"
+
+#include <gtest/gtest.h>
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
+#include <vtkFloatArray.h>
+#include <vtkIntArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkStringArray.h>
+#include <vtkTypeInt32Array.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace cementsph;
+
+namespace {
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("cementsph-polydata-writer-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+// n points with vertex cells (32-bit cell storage, as the snapshots), two triangles, and arrays of five types.
+vtkSmartPointer<vtkPolyData> sample(vtkIdType n) {
+  auto data = vtkSmartPointer<vtkPolyData>::New();
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat();
+  points->SetNumberOfPoints(n);
+  for (vtkIdType i = 0; i < n; ++i) points->SetPoint(i, 0.1 * double(i), std::sin(double(i)), -1e3 / double(i + 1));
+  data->SetPoints(points);
+  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New(), connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
+  offsets->SetNumberOfValues(n + 1);
+  connectivity->SetNumberOfValues(n);
+  for (vtkIdType i = 0; i <= n; ++i) offsets->SetValue(i, vtkTypeInt32(i));
+  for (vtkIdType i = 0; i < n; ++i) connectivity->SetValue(i, vtkTypeInt32(n - 1 - i)); // not the identity
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->SetData(offsets, connectivity);
+  data->SetVerts(verts);
+  if (n >= 4) {
+    auto polys = vtkSmartPointer<vtkCellArray>::New(); // 64-bit storage (VTK's default)
+    const vtkIdType a[3] = {0, 1, 2}, b[3] = {1, 3, 2};
+    polys->InsertNextCell(3, a);
+    polys->InsertNextCell(3, b);
+    data->SetPolys(polys);
+  }
+  auto pressure = vtkSmartPointer<vtkFloatArray>::New();
+  pressure->SetName("pressure_pa");
+  pressure->SetNumberOfValues(n);
+  auto velocity = vtkSmartPointer<vtkFloatArray>::New();
+  velocity->SetName("darcy_velocity_m_per_s");
+  velocity->SetNumberOfComponents(3);
+  velocity->SetNumberOfTuples(n);
+  auto volume = vtkSmartPointer<vtkDoubleArray>::New();
+  volume->SetName("cement_volume_mm3");
+  volume->SetNumberOfValues(n);
+  auto label = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  label->SetName("label <&\">");
+  label->SetNumberOfValues(n);
+  for (vtkIdType i = 0; i < n; ++i) {
+    pressure->SetValue(i, float(1e5 / double(i + 3)));
+    for (int c = 0; c < 3; ++c) velocity->SetComponent(i, c, float(1e-6 * double(c - i)));
+    volume->SetValue(i, 0.1 + 1e-13 * double(i));
+    label->SetValue(i, static_cast<unsigned char>(i % 251));
+  }
+  data->GetPointData()->AddArray(pressure);
+  data->GetPointData()->AddArray(velocity);
+  data->GetPointData()->AddArray(volume);
+  data->GetPointData()->AddArray(label);
+  data->GetPointData()->SetActiveScalars("pressure_pa");
+  if (n >= 4) {
+    auto area = vtkSmartPointer<vtkIntArray>::New();
+    area->SetName("cell_id");
+    area->SetNumberOfValues(n + 2);
+    for (vtkIdType i = 0; i < n + 2; ++i) area->SetValue(i, int(7 * i - 3));
+    data->GetCellData()->AddArray(area);
+  }
+  auto density = vtkSmartPointer<vtkDoubleArray>::New();
+  density->SetName("density_kg_per_m3");
+  density->SetNumberOfValues(1);
+  density->SetValue(0, 1100.0);
+  data->GetFieldData()->AddArray(density);
+  return data;
+}
+
+void expectSameArrays(vtkFieldData* want, vtkFieldData* got, const char* what) {
+  ASSERT_EQ(got->GetNumberOfArrays(), want->GetNumberOfArrays()) << what;
+  for (int k = 0; k < want->GetNumberOfArrays(); ++k) {
+    vtkDataArray* a = want->GetArray(k);
+    if (!a) continue; // not numeric (a string array): the caller checks it
+    vtkDataArray* b = got->GetArray(a->GetName());
+    ASSERT_NE(b, nullptr) << what << " " << a->GetName();
+    EXPECT_EQ(b->GetDataType(), a->GetDataType()) << a->GetName();
+    ASSERT_EQ(b->GetNumberOfComponents(), a->GetNumberOfComponents()) << a->GetName();
+    ASSERT_EQ(b->GetNumberOfTuples(), a->GetNumberOfTuples()) << a->GetName();
+    for (vtkIdType i = 0; i < a->GetNumberOfValues(); ++i)
+      ASSERT_EQ(b->GetVariantValue(i), a->GetVariantValue(i)) << a->GetName() << " value " << i;
+  }
+}
+
+void expectSameCells(vtkCellArray* want, vtkCellArray* got, const char* what) {
+  ASSERT_EQ(got->GetNumberOfCells(), want->GetNumberOfCells()) << what;
+  ASSERT_EQ(got->GetNumberOfConnectivityIds(), want->GetNumberOfConnectivityIds()) << what;
+  for (vtkIdType c = 0; c <= want->GetNumberOfCells(); ++c)
+    ASSERT_EQ(got->GetOffsetsArray()->GetTuple1(c), want->GetOffsetsArray()->GetTuple1(c)) << what << " offset " << c;
+  for (vtkIdType i = 0; i < want->GetNumberOfConnectivityIds(); ++i)
+    ASSERT_EQ(got->GetConnectivityArray()->GetTuple1(i), want->GetConnectivityArray()->GetTuple1(i)) << what << " " << i;
+}
+
+} // namespace
+
+// Every point, cell and array value the raw writer wrote comes back from VTK's reader exactly (tolerance: none),
+// for a snapshot-like cloud and for an empty one (a run's first snapshot can hold no cement).
+TEST(PolyDataWriter, VtksReaderReadsBackEveryValueOfTheRawFile) {
+  for (vtkIdType n : {vtkIdType(0), vtkIdType(1), vtkIdType(1000)}) {
+    SCOPED_TRACE("points " + std::to_string(n));
+    const auto want = sample(n);
+    const fs::path path = scratch("points-" + std::to_string(n) + ".vtp");
+    imaging::writePolyDataUncompressed(want, path.string());
+    const auto got = imaging::readPolyData(path.string());
+    ASSERT_EQ(got->GetNumberOfPoints(), n);
+    for (vtkIdType i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a)
+        ASSERT_EQ(got->GetPoint(i)[a], want->GetPoint(i)[a]) << "point " << i;
+    expectSameCells(want->GetVerts(), got->GetVerts(), "verts");
+    expectSameCells(want->GetPolys(), got->GetPolys(), "polys");
+    expectSameArrays(want->GetPointData(), got->GetPointData(), "point data");
+    expectSameArrays(want->GetCellData(), got->GetCellData(), "cell data");
+    expectSameArrays(want->GetFieldData(), got->GetFieldData(), "field data");
+    if (n > 0) {
+      ASSERT_NE(got->GetPointData()->GetScalars(), nullptr);
+      EXPECT_STREQ(got->GetPointData()->GetScalars()->GetName(), "pressure_pa");
+    }
+    // Raw and uncompressed: the file holds the values' bytes (here 25 bytes a point for the arrays, 12 for the
+    // point, 8 for its vertex), so it is at least that long.
+    EXPECT_GE(fs::file_size(path), std::uintmax_t(n) * (25 + 12 + 8));
+  }
+}
+
+// What the raw writer does not take (a string array) goes to VTK's writer: the file is still read back whole.
+TEST(PolyDataWriter, AnArrayTheRawWriterCannotTakeGoesToVtksWriter) {
+  const auto want = sample(10);
+  // VTK's writer puts names into its XML unescaped (it wrote an unreadable file for "label <&\">").
+  want->GetPointData()->GetArray("label <&\">")->SetName("label");
+  auto names = vtkSmartPointer<vtkStringArray>::New();
+  names->SetName("names");
+  names->SetNumberOfValues(10);
+  for (vtkIdType i = 0; i < 10; ++i) names->SetValue(i, "p" + std::to_string(i));
+  want->GetPointData()->AddArray(names);
+  const fs::path path = scratch("strings.vtp");
+  imaging::writePolyDataUncompressed(want, path.string());
+  const auto got = imaging::readPolyData(path.string());
+  ASSERT_EQ(got->GetNumberOfPoints(), 10);
+  auto* back = vtkStringArray::SafeDownCast(got->GetPointData()->GetAbstractArray("names"));
+  ASSERT_NE(back, nullptr);
+  EXPECT_EQ(back->GetValue(9), "p9");
+  expectSameArrays(want->GetPointData(), got->GetPointData(), "point data");
+}
+
+// A directory that does not exist: one error naming the file, nothing left behind.
+TEST(PolyDataWriter, AnUnwritablePathThrowsNamingIt) {
+  const fs::path path = scratch("no-such-dir") / "points.vtp";
+  try {
+    imaging::writePolyDataUncompressed(sample(5), path.string());
+    FAIL() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("points.vtp"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(path));
+}
