@@ -4,8 +4,9 @@
 set -euo pipefail
 
 PACKAGES=(
-  # toolchain
-  cmake g++ make pkg-config
+  # toolchain; ccache makes rebuilds and CI's clean clones cheap (scripts/build.sh and ci-sanitizers.sh use it
+  # where present: without it CI's cold build and sanitizer tree take about an hour on the 2-core machine)
+  cmake g++ make pkg-config ccache
   # core numerics
   libeigen3-dev
   # imaging and visualisation
