@@ -324,8 +324,10 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
       break;
     }
     if (model->time() >= nextSnapshot * (1 - 1e-12) && model->time() < endTime) {
+      // The cement first: an engine may give the volume record its snapshot's sum (the voxel engine does).
+      vtkSmartPointer<vtkPolyData> cement = writer.writing() ? model->cement() : nullptr;
       s.volumeHistory.push_back(volumeRecord());
-      if (writer.writing()) writer.snapshot(model->time(), model->cement());
+      if (cement) writer.snapshot(model->time(), std::move(cement));
       while (nextSnapshot <= model->time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
     }
     if (!progress.step(model->time(), [&] { return model->state(); })) {
