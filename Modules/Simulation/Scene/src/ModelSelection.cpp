@@ -39,24 +39,24 @@ PoreScale poreScaleOf(const std::vector<std::uint8_t>& solid, const std::array<i
   s.voxelSizeM = std::max({spacingM[0], spacingM[1], spacingM[2]});
   const std::size_t nx = std::size_t(size[0]), ny = std::size_t(size[1]), nz = std::size_t(size[2]);
   if (solid.size() != nx * ny * nz || solid.empty()) return s;
-  const std::size_t stride[3] = {1, nx, nx * ny};
-  double length = 0, runs = 0;
-  for (int a = 0; a < 3; ++a) {
-    const int b = (a + 1) % 3, c = (a + 2) % 3;
-    for (int v = 0; v < size[std::size_t(c)]; ++v)
-      for (int u = 0; u < size[std::size_t(b)]; ++u) {
-        bool inPore = false;
-        for (int t = 0; t < size[std::size_t(a)]; ++t) {
-          const std::size_t index = std::size_t(t) * stride[a] + std::size_t(u) * stride[b] + std::size_t(v) * stride[c];
-          const bool pore = !solid[index];
-          if (pore) {
-            length += spacingM[std::size_t(a)];
-            if (!inPore) runs += 1;
-          }
-          inPore = pore;
-        }
+  // One pass in memory order (issue 23: the three axis-by-axis scans, two of them strided, were 2 % of a 5 ml
+  // run on a whole-scan region): along each axis the pore length is the pore voxel count times the spacing, and a
+  // run starts at every pore voxel whose predecessor along that axis is solid or outside the region.
+  std::size_t pores = 0, starts[3] = {0, 0, 0};
+  for (std::size_t k = 0; k < nz; ++k)
+    for (std::size_t j = 0; j < ny; ++j) {
+      const std::size_t row = nx * (j + ny * k);
+      for (std::size_t i = 0; i < nx; ++i) {
+        const std::size_t index = row + i;
+        if (solid[index]) continue;
+        ++pores;
+        starts[0] += i == 0 || solid[index - 1];
+        starts[1] += j == 0 || solid[index - nx];
+        starts[2] += k == 0 || solid[index - nx * ny];
       }
-  }
+    }
+  const double length = double(pores) * (spacingM[0] + spacingM[1] + spacingM[2]);
+  const double runs = double(starts[0] + starts[1] + starts[2]);
   s.meanPoreChordM = runs > 0 ? length / runs : 0.0;
   return s;
 }

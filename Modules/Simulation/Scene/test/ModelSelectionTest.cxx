@@ -62,6 +62,19 @@ TEST(ModelSelection, TheMeanPoreChordIsTheHandCount) {
   EXPECT_NEAR(poreScaleOf(open, {8, 8, 8}, {1e-3, 1e-3, 1e-3}, true).meanPoreChordM, 8e-3, 1e-15);
 }
 
+// Each axis counted apart (the slabs above are the same along x and y, so a count that mixed those two axes
+// passed them): solid planes normal to y (every j divisible by 4) in a 12 x 12 x 12 region, spacings 1, 2 and
+// 0.5 mm. By hand: 9 pore planes, 1296 pore voxels; runs along x 9 x 12 = 108 (whole rows), along z 108, along y
+// 3 per (i, k) column = 432; L = 1296 x (1 + 2 + 0.5) mm / 648 = 7 mm.
+TEST(ModelSelection, EachAxisRunsAreCountedAlongThatAxis) {
+  const int n = 12;
+  std::vector<std::uint8_t> solid(std::size_t(n * n * n), 0);
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; j += 4)
+      for (int i = 0; i < n; ++i) solid[std::size_t(i + n * (j + n * k))] = 1;
+  EXPECT_NEAR(poreScaleOf(solid, {n, n, n}, {1e-3, 2e-3, 0.5e-3}, true).meanPoreChordM, 7e-3, 1e-15);
+}
+
 TEST(ModelSelection, ResolvedPoreSpaceRunsParticlesAndClinicalCtRunsVoxels) {
   const Slabs wide{40, 20, 3, 0.5e-3}; // L = 13.5 mm by hand (27 voxels)
   const double L = wide.meanChordM();
