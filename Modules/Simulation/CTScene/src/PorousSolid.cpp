@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -109,28 +108,40 @@ PorousSolid buildPorousSolid(const imaging::ImageType* ct, const Eigen::Vector3d
     throw std::invalid_argument(m.str());
   }
 
-  // Pore space 6-connected to the tip within the ROI (flat indices: the grid is x fastest).
+  // Pore space 6-connected to the tip within the ROI (flat indices: the grid is x fastest), by a span fill: each
+  // run of pore voxels along x is taken whole and seeds the runs it touches in the four rows beside it (y +- 1,
+  // z +- 1). The same set as a voxel-by-voxel breadth-first search, with streaming access along x and one seed a
+  // run instead of a queue entry a voxel (issue 23: the search was the largest region-sized pass of a whole-scan
+  // region, 186 of the 941 samples it adds over the 40 mm region at 5 ml).
   {
     std::vector<std::uint8_t> seen(s.grid.count(), 0);
-    const std::size_t sx = 1, sy = std::size_t(nx), sz = std::size_t(nx) * std::size_t(ny);
-    std::deque<std::size_t> queue{s.grid.index(ti, tj, tk)};
-    seen[queue.front()] = 1;
-    while (!queue.empty()) {
-      const std::size_t n = queue.front();
-      queue.pop_front();
-      ++s.connectedPoreVoxels;
-      const int i = int(n % sy), j = int((n / sy) % std::size_t(ny)), k = int(n / sz);
-      auto visit = [&](bool inside, std::size_t m) {
-        if (!inside || seen[m] || s.solid[m]) return;
-        seen[m] = 1;
-        queue.push_back(m);
+    const std::size_t sx = std::size_t(nx), sy = std::size_t(ny), rowStride = sx, planeStride = sx * sy;
+    std::vector<std::size_t> seeds{s.grid.index(ti, tj, tk)};
+    auto open = [&](std::size_t m) { return !s.solid[m] && !seen[m]; };
+    while (!seeds.empty()) {
+      const std::size_t n = seeds.back();
+      seeds.pop_back();
+      if (seen[n]) continue; // filled from another seed since (a seed is pore by construction)
+      const std::size_t row = n / sx, rowStart = row * sx, rowEnd = rowStart + sx; // [rowStart, rowEnd)
+      std::size_t lo = n, hi = n + 1;                                                    // the run [lo, hi)
+      while (lo > rowStart && open(lo - 1)) --lo;
+      while (hi < rowEnd && open(hi)) ++hi;
+      std::fill(seen.begin() + std::ptrdiff_t(lo), seen.begin() + std::ptrdiff_t(hi), std::uint8_t(1));
+      s.connectedPoreVoxels += hi - lo;
+      const std::size_t j = row % sy, k = row / sy;
+      auto seedRow = [&](std::size_t offset, bool down) {
+        bool inRun = false;
+        for (std::size_t m = lo; m < hi; ++m) {
+          const std::size_t q = down ? m - offset : m + offset;
+          const bool pore = open(q);
+          if (pore && !inRun) seeds.push_back(q);
+          inRun = pore;
+        }
       };
-      visit(i + 1 < nx, n + sx);
-      visit(i > 0, n - sx);
-      visit(j + 1 < ny, n + sy);
-      visit(j > 0, n - sy);
-      visit(k + 1 < nz, n + sz);
-      visit(k > 0, n - sz);
+      if (j > 0) seedRow(rowStride, true);
+      if (j + 1 < sy) seedRow(rowStride, false);
+      if (k > 0) seedRow(planeStride, true);
+      if (k + 1 < std::size_t(nz)) seedRow(planeStride, false);
     }
   }
   const double voxelMm3 = spacing.prod();
