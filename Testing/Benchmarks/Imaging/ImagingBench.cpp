@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
 #include <sstream>
 #include <string>
 
@@ -329,7 +330,8 @@ void benchCompare(const fs::path& work) {
 
 } // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int run(int argc, char** argv) {
   fs::path work = fs::temp_directory_path() / "cementsph-imaging-bench";
   bool quick = false;
   std::string only;
@@ -345,8 +347,11 @@ int main(int argc, char** argv) {
     else if (a == "--coarse-affine") { gOptions.affineShrink = {2}; gOptions.affineSigmaVoxels = {1.0}; }
     else if (a == "--no-elastix") gElastix = false;
     else if (a == "--elastix-no-mask") gElastixMask = false;
-    else if (a.rfind("--elastix-map=", 0) == 0) gElastixMap = a.substr(14);
-    else work = a;
+    else if (a.rfind("--elastix-map=", 0) == 0) {
+      gElastixMap = a.substr(14);
+      if (!fs::is_regular_file(gElastixMap))
+        throw std::invalid_argument("--elastix-map=" + gElastixMap + ": no such file (give an elastix parameter map)");
+    } else work = a;
   }
   fs::create_directories(work);
   std::cout << "## Imaging benchmark (imaging-bench)\n";
@@ -355,4 +360,16 @@ int main(int argc, char** argv) {
   if (only.empty() || only == "registration")
     benchRegistration(work, quick ? 64 : 128, quick ? 1.5 : 0.8, quick ? 1 : gPairs);
   return 0;
+}
+} // namespace
+
+// One line and exit status 2 for a bad option or a failed step (a number that does not parse, a missing map),
+// not an uncaught exception.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "imaging-bench: " << e.what() << "\n";
+    return 2;
+  }
 }
