@@ -102,41 +102,14 @@ struct Affine12 {
 std::string gElastixMap; // --elastix-map=FILE: another parameter map, for tuning runs
 bool gElastixMask = true; // --elastix-no-mask: elastix sees the cement (as ours does with maskCement off)
 
-// The moving mask ours uses (AffineRegistration.cpp, RegistrationOptions' defaults): 0 on the cement (moving
+// The moving mask ours uses (imaging::cementMetricMask with RegistrationOptions' defaults): 0 on the cement (moving
 // above max(fixed) + 100 HU) grown by a 2 mm ball, 1 elsewhere; given to elastix as -mMask so that both
 // registrations see the same voxels (without it elastix's metric is dominated by the 3000 HU ball, which
 // has nothing to match in the fixed image: 8-9 mm TRE whatever its metric, 2026-12-04).
 void writeMovingMask(const ImageType* fixed, const ImageType* moving, const fs::path& file) {
-  float fixedMax = -1e30f;
-  const float* f = fixed->GetBufferPointer();
-  for (std::size_t i = 0, n = fixed->GetLargestPossibleRegion().GetNumberOfPixels(); i < n; ++i) fixedMax = std::max(fixedMax, f[i]);
-  const float threshold = fixedMax + 100.0f;
-  using Mask = itk::Image<unsigned char, 3>;
-  auto mask = Mask::New();
-  mask->CopyInformation(moving);
-  mask->SetRegions(moving->GetLargestPossibleRegion());
-  mask->Allocate();
-  mask->FillBuffer(1);
-  const auto size = moving->GetLargestPossibleRegion().GetSize();
-  const auto sp = moving->GetSpacing();
-  int radius[3];
-  for (int a = 0; a < 3; ++a) radius[a] = int(std::ceil(2.0 / sp[a]));
-  const float* m = moving->GetBufferPointer();
-  unsigned char* out = mask->GetBufferPointer();
-  const long nx = long(size[0]), ny = long(size[1]), nz = long(size[2]);
-  for (long k = 0; k < nz; ++k)
-    for (long j = 0; j < ny; ++j)
-      for (long i = 0; i < nx; ++i) {
-        if (m[i + nx * (j + ny * k)] < threshold) continue;
-        for (long dk = -radius[2]; dk <= radius[2]; ++dk)
-          for (long dj = -radius[1]; dj <= radius[1]; ++dj)
-            for (long di = -radius[0]; di <= radius[0]; ++di) {
-              const long x = i + di, y = j + dj, z = k + dk;
-              if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz) continue;
-              const double r2 = std::pow(double(di) * sp[0], 2) + std::pow(double(dj) * sp[1], 2) + std::pow(double(dk) * sp[2], 2);
-              if (r2 <= 4.0) out[x + nx * (y + ny * z)] = 0;
-            }
-      }
+  std::size_t masked = 0;
+  using Mask = imaging::MaskType;
+  Mask::Pointer mask = imaging::cementMetricMask(fixed, moving, imaging::RegistrationOptions{}, masked);
   auto writer = itk::ImageFileWriter<Mask>::New();
   writer->SetImageIO(itk::MetaImageIO::New());
   writer->SetInput(mask);

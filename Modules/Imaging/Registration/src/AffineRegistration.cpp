@@ -228,6 +228,19 @@ void runStage(SmoothedImages& images, const MetricMasks& masks, TTransform* tran
 
 } // namespace
 
+MaskType::Pointer cementMetricMask(const ImageType* fixed, const ImageType* moving, const RegistrationOptions& options,
+                                   std::size_t& masked) {
+  auto minmax = itk::MinimumMaximumImageCalculator<ImageType>::New();
+  minmax->SetImage(fixed);
+  minmax->ComputeMaximum();
+  MaskType::Pointer cement =
+      thresholdAndDilate(moving, minmax->GetMaximum() + options.cementMarginHU, options.cementDilationMm, masked);
+  auto* p = cement->GetBufferPointer(); // invert: 1 where the metric may look
+  const std::size_t n = cement->GetLargestPossibleRegion().GetNumberOfPixels();
+  for (std::size_t i = 0; i < n; ++i) p[i] = static_cast<std::uint8_t>(1 - p[i]);
+  return cement;
+}
+
 RegistrationResult registerAffine(const ImageType* fixed, const ImageType* moving,
                                   const RegistrationOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -244,14 +257,8 @@ RegistrationResult registerAffine(const ImageType* fixed, const ImageType* movin
 
   MetricMasks masks;
   if (options.maskCement) {
-    MaskType::Pointer cement = thresholdAndDilate(moving, result.cementThresholdHU,
-                                                  options.cementDilationMm, result.maskedMovingVoxels);
-    if (result.maskedMovingVoxels > 0) {
-      auto* p = cement->GetBufferPointer(); // invert: 1 where the metric may look
-      const std::size_t n = cement->GetLargestPossibleRegion().GetNumberOfPixels();
-      for (std::size_t i = 0; i < n; ++i) p[i] = static_cast<std::uint8_t>(1 - p[i]);
-      masks.moving = asSpatialObject(cement);
-    }
+    MaskType::Pointer cement = cementMetricMask(fixed, moving, options, result.maskedMovingVoxels);
+    if (result.maskedMovingVoxels > 0) masks.moving = asSpatialObject(cement);
   }
   if (std::isfinite(options.bodyThresholdHU)) {
     std::size_t inside = 0;
