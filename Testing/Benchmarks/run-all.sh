@@ -14,7 +14,7 @@
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
 #   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
 #                  whole-scan region against the 40 mm one), threads, snapshots (5 ml with its 100 snapshots
-#                  against one), particles (particle-darcy against voxel-darcy, 0.5 and 1 ml; PARTICLE_VOLUMES=0.5,1,5
+#                  against one), particles (every engine and the paper preset against voxel-darcy, 0.5 and 1 ml; PARTICLE_VOLUMES=0.5,1,5
 #                  for 5 ml itself), sph, plan (an oblique plan against the axial one), peers (DRR, registration);
 #                  default all. The tables then hold only those sections' figures
 #
@@ -279,7 +279,8 @@ if want("particles") and not QUICK:
     # PARTICLE_VOLUMES=1,5 measures 5 ml itself.
     pvols = [float(x) for x in os.environ.get("PARTICLE_VOLUMES", "0.5,1").split(",") if x.strip()]
     # Every engine of README's model table against the voxel one (ENGINES=... for fewer).
-    engines = [e for e in os.environ.get("ENGINES", "voxel-darcy,particle-darcy,incompressible,equation-of-state").split(",") if e]
+    # "paper" is the `paper` preset (--preset paper: the paper's weakly compressible particles with its time step).
+    engines = [e for e in os.environ.get("ENGINES", "voxel-darcy,particle-darcy,incompressible,equation-of-state,paper").split(",") if e]
     if "voxel-darcy" not in engines:
         engines.insert(0, "voxel-darcy")
     # Issue 19 asks for solver iterations, time per solve and particles per second each as a ratio to the voxel
@@ -294,7 +295,7 @@ if want("particles") and not QUICK:
                 order.reverse()
             for engine in order:
                 tag = "engine-%s-%gml-%d" % (engine, vol, rep)
-                r = inject(CURRENT, tag, vol, extra=["--set", "pressure_model=%s" % engine])
+                r = inject(CURRENT, tag, vol, extra=["--preset", "paper"] if engine == "paper" else ["--set", "pressure_model=%s" % engine])
                 if r["rc"] == 0:
                     with open(os.path.join(OUT, "runs", tag, "metrics.json")) as f:
                         m = json.load(f)
@@ -317,7 +318,7 @@ if want("particles") and not QUICK:
                 continue
             summary.append(("%s / voxel-darcy, %g ml phantom, 1 thread" % (engine, vol), "%s s / %s s CPU" % (fmt(med(rs, "cpu")), fmt(med(v, "cpu"))),
                             "%s x the voxel engine's CPU%s (load %.1f)" % (ratio(med(rs, "cpu"), med(v, "cpu")), " (target at 5 ml <= 3 x)" if engine == "particle-darcy" else "", loads[-1]),
-                            "cementsph inject ... --volume-ml %g --set pressure_model=%s" % (vol, engine)))
+                            "cementsph inject ... --volume-ml %g %s" % (vol, "--preset paper" if engine == "paper" else "--set pressure_model=" + engine)))
     if len(pvols) >= 2 and 5 not in pvols and "particle-darcy" in engines:
         # The voxel engine at 5 ml is cheap (seconds) and is measured; only particle-darcy's 5 ml CPU is extrapolated
         # from its growth exponent (the voxel engine's own exponent at small volumes reflects its fixed costs).
