@@ -72,4 +72,25 @@ inline double macroStep(std::vector<double> speeds, double vmaxDarcy, double dtM
   return std::min(dtMax, std::max(dt, rule.limit / vFast));
 }
 
+// A static field f known with its gradient at the eight corners of a grid cell (corner c = di + 2 dj + 4 dk, di, dj,
+// dk in {0, 1}), read at the point with cell coordinates t (0..1 per axis; spacing: the cell's size): the mean of
+// the trilinear value and the trilinear blend of the corners' first-order Taylor expansions f_c + grad f_c . (x - x_c).
+// On a quadratic the first errs by +1/2 sum_a f_aa t_a (1 - t_a) spacing_a^2 and the second by as much the other
+// way (the trilinear weights' first moments about the point vanish, so no cross term enters), so the mean is exact
+// for every quadratic; plain trilinear interpolation is exact only for the multilinear ones. The model's closed
+// space sums are read this way (ParticleDarcyInjectionModel.cpp: closedSumsAt).
+inline double blendedTrilinear(const double value[8], const Eigen::Vector3d grad[8], const Eigen::Vector3d& t,
+                               const Eigen::Vector3d& spacing) {
+  double plain = 0, slope = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+    double w = 1;
+    Eigen::Vector3d dx;
+    for (int a = 0; a < 3; ++a) w *= d[a] ? t[a] : 1 - t[a], dx[a] = (t[a] - d[a]) * spacing[a];
+    plain += w * value[c];
+    slope += w * grad[c].dot(dx);
+  }
+  return plain + 0.5 * slope;
+}
+
 } // namespace cementsph::scene::particle_darcy
