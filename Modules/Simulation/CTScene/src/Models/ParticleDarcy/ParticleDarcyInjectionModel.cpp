@@ -96,25 +96,29 @@
 //    voxels' part of each particle's number density n_i, of its concentration gradient (shifting) and of its
 //    support's second moment (the wall correction) depends only on the particle's position (the closed set is
 //    static). Each is summed exactly, once, at the voxel centres a particle comes near (closedNode) and
-//    interpolated between the eight about the particle (closedSumsAt): for the number density and the second
-//    moment the mean of the trilinear value and the trilinear blend of the corners' first-order Taylor
-//    expansions (the gradients summed exactly at the corners: the number density's is the concentration
-//    gradient / d^3), which cancels trilinear interpolation's O(spacing^2) error; the concentration gradient
-//    trilinearly. Measured against the exact sums at every particle-step of the 1 ml phantom run (66 507):
-//    number density max 0.072 % (mean 0.015 %) of a full lattice's; second moment max 0.0023 (mean 0.0003)
-//    of a full support's 3, the wall factor s_i max 0.10 % (mean 0.016 %); concentration gradient (shifting
-//    only) max 0.038 / h (mean 0.014 / h; its mean size 0.30 / h). Plain trilinear values erred 24x more
-//    (number density max 1.7 %, s_i 1.8 %). Before, every particle summed its ~530 closed voxels every step.
-//    The open space about the cement (ghosts, open space behind solid) is still summed voxel by voxel, each run
-//    of closed or cement voxels jumped at once; the particles' colour is summed in single precision (it is stored
-//    so), four voxels at a time where SSE2 is there, over the runs of open voxels.
-//    Effect on the phantom oracles (against the voxel model; before -> after): 1 ml Dice 0.891 -> 0.886,
-//    spreading +0.265 -> +0.275 mm, tip 0.931 -> 0.992x; 5 ml Dice 0.875 -> 0.873, spreading +0.386 -> +0.384 mm,
-//    tip 1.006 -> 1.030x (a change at the level of the last bit moves the 5 ml run this much: 0.876, +0.371,
-//    0.992x before a refactoring that left the 1 ml run's figures identical). Uniform medium, plates and
-//    hemisphere within their tolerances (ParticleDarcyTest; the plate's near-wall pressure 0.976 -> 0.949 of the
-//    image solution's, tolerance 10 %). CPU (whole process, 1 thread, bundled phantom, paper scene): 0.71-0.76x
-//    of before at 1 ml, 0.72x at 5 ml; about 42x the voxel model's at 5 ml (issue 19's 3x is not met).
+//    interpolated between the eight about the particle (closedSumsAt): the mean of the trilinear value and the
+//    trilinear blend of the corners' first-order Taylor expansions (particle_darcy::blendedTrilinear, exact on
+//    quadratics: it cancels trilinear interpolation's O(spacing^2) error), the gradients summed exactly at the
+//    corners too (the number density's is the concentration gradient / d^3; the second moment's and the
+//    concentration gradient's Jacobian are their own sums). Measured against the exact sums at every
+//    particle-step of the 1 ml phantom run (68 264): number density max 0.082 % (mean 0.015 %) of a full
+//    lattice's; second moment max 0.0022 (mean 0.0003) of a full support's 3, the wall factor s_i max 0.11 %
+//    (mean 0.016 %); concentration gradient max 0.0020 / h (mean 0.0006 / h; its mean size 0.30 / h). Plain
+//    trilinear values erred 20-25x more (number density max 1.7 %, s_i 1.8 %, gradient 0.038 / h; with the gradient read
+//    trilinearly the plate's near-wall pressure fell from 0.976 to 0.949 of the image solution's, 0.984 blended).
+//    Before, every particle summed its ~530 closed voxels every step. The open space about the cement (ghosts,
+//    open space behind solid) is still summed voxel by voxel, each run of closed or cement voxels jumped at once;
+//    the particles' colour is summed in single precision (it is stored so), four voxels at a time where SSE2 is
+//    there, over the runs of open voxels (so its last bits depend on where a run starts).
+//    Effect on the phantom oracles (against the voxel model; before -> after): 1 ml Dice 0.891 -> 0.889,
+//    spreading +0.265 -> +0.271 mm, tip 0.931 -> 0.955x; 5 ml Dice 0.875 -> 0.885, spreading +0.386 -> +0.351 mm,
+//    tip 1.006 -> 1.021x. The 5 ml run moves about this much with a change in the last bits (Dice 0.865 to 0.885,
+//    +0.351 to +0.425 mm, 0.99 to 1.04x over four builds with the blended interpolant, two pairs of which differ
+//    only in rounding; with plain trilinear values 0.865, +0.444 mm, 1.03x). Uniform medium, plates and hemisphere:
+//    each figure within 1.1 points of before (ParticleDarcyTest). CPU (whole process, 1 thread, bundled phantom,
+//    paper scene): about 0.71x of before at 1 ml, 0.65x at 5 ml; 41x the voxel model's at 5 ml (issue 19's 3x is
+//    not met). Memory: the field holds 14 floats per node, in blocks of 8^3 nodes allocated where the cement
+//    comes (peak memory at 1 ml 166 MB against 163 MB before; 220 MB with the whole grid's field).
 // Published designs read for this: SPlisHSPlasH's DFSPH step (Bender & Koschier 2017), PySPH's ISPH/IISPH
 // (Ihmsen et al. 2014), SPHinXsys's free-surface indicator (Zhang et al.), porous-media ISPH (Shao 2010).
 #include "cementsph/scene/InjectionModel.h"
@@ -559,21 +563,31 @@ private:
   // The closed space's sums at a point x (static: the closed set does not change): its number density
   // sum_c (V_c / d^3) W, its concentration gradient sum_c V_c F/r (x_c - x) and its second moment sum_c V_c F/r |x_c - x|^2,
   // over the closed voxels and the space outside the region. Evaluated exactly on the voxel centres (closedNode:
-  // once per node, the first time a particle needs it) and trilinearly interpolated between them: each sum is a C2
-  // function of x (Wendland C2), so the interpolation error is (spacing^2 / 8) times its second derivatives (header).
+  // once per node, with their gradients, the first time a particle needs it) and interpolated between them by
+  // particle_darcy::blendedTrilinear (exact on quadratics; each sum is a C2 function of x, Wendland C2: header).
   struct ClosedSums {
     double num = 0, missing = 0;
     Eigen::Vector3d grad = Eigen::Vector3d::Zero();
   };
   const float* closedNode(int i, int j, int k) {
-    float* node = closedField_.data() + kFieldValues * paddedIndex(i, j, k);
+    // The nodes are kept in blocks of 8 x 8 x 8, each allocated when a particle first needs one of its nodes: the
+    // memory follows the cement, not the CT (a fine micro-CT's whole grid at 14 floats a voxel would not fit).
+    const int I = i + pad_, J = j + pad_, K = k + pad_;
+    std::unique_ptr<float[]>& block =
+        closedField_[std::size_t(I >> 3) + std::size_t(fieldBlocks_[0]) * (std::size_t(J >> 3) + std::size_t(fieldBlocks_[1]) * std::size_t(K >> 3))];
+    if (!block) {
+      block.reset(new float[std::size_t(kFieldValues) * 512]);
+      std::fill(block.get(), block.get() + std::size_t(kFieldValues) * 512, std::numeric_limits<float>::quiet_NaN());
+    }
+    float* node = block.get() + std::size_t(kFieldValues) * std::size_t((I & 7) + 8 * ((J & 7) + 8 * (K & 7)));
     if (!std::isnan(node[0])) return node;
     const std::uint8_t* centre = closedPad_.data() + paddedIndex(i, j, k);
-    double s[kFieldValues] = {0, 0, 0, 0, 0, 0, 0, 0};
+    double s[kFieldValues] = {};
     for (const FieldEntry& e : fieldStencil_) { // no branch: closed is 0 or 1
       const double c = double(centre[e.offset]);
       s[0] += c * e.w, s[1] += c * e.fr[0], s[2] += c * e.fr[1], s[3] += c * e.fr[2], s[4] += c * e.fr2;
       s[5] += c * e.dm[0], s[6] += c * e.dm[1], s[7] += c * e.dm[2];
+      for (int a = 0; a < 6; ++a) s[8 + a] += c * e.dg[a];
     }
     for (int a = 0; a < kFieldValues; ++a) node[a] = float(s[a]);
     return node;
@@ -587,24 +601,26 @@ private:
       c[a] = std::min(int(std::floor(u)), g.size[a] - 1);
       t[a] = u - c[a];
     }
-    // The number density and the second moment with their gradients (the number density's is the concentration
-    // gradient / d^3, the second moment's is stored): particle_darcy::blendedTrilinear, exact on quadratics; the
-    // concentration gradient itself trilinearly.
-    double num[8], missing[8];
-    Eigen::Vector3d numGrad[8], missingGrad[8], grad = Eigen::Vector3d::Zero();
+    // Each sum with its gradient (the number density's is the concentration gradient / d^3; the second moment's
+    // and the concentration gradient's Jacobian are stored): particle_darcy::blendedTrilinear, exact on quadratics.
+    double num[8], missing[8], gradA[3][8];
+    Eigen::Vector3d numGrad[8], missingGrad[8], gradGrad[3][8];
     for (int corner = 0; corner < 8; ++corner) {
-      const int di = corner & 1, dj = (corner >> 1) & 1, dk = (corner >> 2) & 1;
-      const double w = (di ? t[0] : 1 - t[0]) * (dj ? t[1] : 1 - t[1]) * (dk ? t[2] : 1 - t[2]);
-      const float* node = closedNode(c[0] + di, c[1] + dj, c[2] + dk);
+      const float* node = closedNode(c[0] + (corner & 1), c[1] + ((corner >> 1) & 1), c[2] + ((corner >> 2) & 1));
       const Eigen::Vector3d nodeGrad(node[1], node[2], node[3]);
-      num[corner] = node[0], numGrad[corner] = nodeGrad / volume_, grad += w * nodeGrad;
+      num[corner] = node[0], numGrad[corner] = nodeGrad / volume_;
       missing[corner] = node[4], missingGrad[corner] = Eigen::Vector3d(node[5], node[6], node[7]);
+      // The concentration gradient's Jacobian (symmetric: xx, yy, zz, xy, xz, yz), one row per component.
+      const float* J = node + 8;
+      gradGrad[0][corner] = Eigen::Vector3d(J[0], J[3], J[4]), gradGrad[1][corner] = Eigen::Vector3d(J[3], J[1], J[5]);
+      gradGrad[2][corner] = Eigen::Vector3d(J[4], J[5], J[2]);
+      for (int a = 0; a < 3; ++a) gradA[a][corner] = node[1 + a];
     }
     const Eigen::Vector3d tv(t[0], t[1], t[2]);
     ClosedSums out;
     out.num = particle_darcy::blendedTrilinear(num, numGrad, tv, g.spacing);
     out.missing = particle_darcy::blendedTrilinear(missing, missingGrad, tv, g.spacing);
-    out.grad = grad;
+    for (int a = 0; a < 3; ++a) out.grad[a] = particle_darcy::blendedTrilinear(gradA[a], gradGrad[a], tv, g.spacing);
     return out;
   }
   // The open share of a kernel support, 1 - (closed share), bounded below so that a voxel walled in on almost
@@ -705,9 +721,10 @@ private:
     const sph::VoxelGrid& g = solid_->grid;
     const double rest = kernel_.support * kernel_.support - (ry2 + rz2);
     if (!(rest > 0)) return false;
-    const double half = std::sqrt(rest);
-    i0 = std::max(lo, int(std::ceil((px - half - g.origin[0]) / g.spacing[0])) - 1);
-    i1 = std::min(hi, int(std::floor((px + half - g.origin[0]) / g.spacing[0])) + 1);
+    const double half = std::sqrt(rest), inverse = 1.0 / g.spacing[0];
+    // Truncation for floor and ceil: it widens the range by at most a voxel (a superset: lo clips it), no rounding call.
+    i0 = std::max(lo, int((px - half - g.origin[0]) * inverse) - 1);
+    i1 = std::min(hi, int((px + half - g.origin[0]) * inverse) + 1);
     return i0 <= i1;
   }
 
@@ -766,9 +783,15 @@ private:
           const double q = rn / kernel_.h, t = std::max(0.0, 1 - 0.5 * q);
           const double slope = kernel_.fNorm * (2 * t * t * t - 1.5 * q * t * t);
           for (int a = 0; a < 3; ++a) e.dm[a] = -vc * slope * r[a];
+          // d/dx_b of V_c (F/r)(r) r_a: V_c (1.5 fNorm t^2 r_a r_b / (h |r|) - fNorm t^3 delta_ab).
+          const double radial = rn > 0 ? 1.5 * kernel_.fNorm * t * t / (kernel_.h * rn) : 0.0, diagonal = -kernel_.fNorm * t * t * t;
+          const int ab[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+          for (int o = 0; o < 6; ++o) e.dg[o] = vc * (radial * r[ab[o][0]] * r[ab[o][1]] + (ab[o][0] == ab[o][1] ? diagonal : 0.0));
           fieldStencil_.push_back(e);
         }
-    closedField_.assign(std::size_t(kFieldValues) * closedPad_.size(), std::numeric_limits<float>::quiet_NaN());
+    for (int a = 0; a < 3; ++a) fieldBlocks_[a] = (padSize_[a] + 7) / 8;
+    closedField_.clear();
+    closedField_.resize(std::size_t(fieldBlocks_[0]) * std::size_t(fieldBlocks_[1]) * std::size_t(fieldBlocks_[2]));
   }
   std::size_t paddedIndex(int i, int j, int k) const {
     return std::size_t(i + pad_) + std::size_t(padSize_[0]) * (std::size_t(j + pad_) + std::size_t(padSize_[1]) * std::size_t(k + pad_));
@@ -1531,10 +1554,16 @@ private:
   struct FieldEntry {
     std::ptrdiff_t offset = 0; // in the padded grid
     double w = 0, fr[3] = {0, 0, 0}, fr2 = 0, dm[3] = {0, 0, 0}; // dm: the gradient of V_c F/r r^2 in the point
+    double dg[6] = {0, 0, 0, 0, 0, 0}; // the Jacobian of V_c F/r r in the point (xx, yy, zz, xy, xz, yz)
   };
-  static constexpr int kFieldValues = 8; // per node: number density, concentration gradient (3), second moment and its gradient (3)
+  // Per node: number density, concentration gradient (3), second moment and its gradient (3), the concentration
+  // gradient's Jacobian (6).
+  static constexpr int kFieldValues = 14;
   std::vector<FieldEntry> fieldStencil_;
-  std::vector<float> closedField_; // per padded voxel centre the kFieldValues closed sums (closedNode), NaN until computed
+  // Per padded voxel centre the kFieldValues closed sums (closedNode), NaN until computed, in blocks of 8^3 nodes
+  // allocated on first use (fieldBlocks_: blocks per axis).
+  std::vector<std::unique_ptr<float[]>> closedField_;
+  int fieldBlocks_[3] = {0, 0, 0};
   std::vector<std::int32_t> closedSum_; // the closed voxels' summed-volume table over the padded grid (closedInBox)
   // Over the box cementLo_ + [0, cementDim_) about the particles, rebuilt every step (markCementRuns): per closed
   // or open occupied voxel the steps along +x to the next voxel that is neither (at most 255), 0 elsewhere.
