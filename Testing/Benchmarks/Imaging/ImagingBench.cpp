@@ -99,6 +99,7 @@ struct Affine12 {
   }
 };
 
+imaging::RegistrationOptions gOptions; // adjustable from the command line, for tuning runs
 std::string gElastixMap; // --elastix-map=FILE: another parameter map, for tuning runs
 bool gElastixMask = true; // --elastix-no-mask: elastix sees the cement (as ours does with maskCement off)
 
@@ -109,7 +110,7 @@ bool gElastixMask = true; // --elastix-no-mask: elastix sees the cement (as ours
 void writeMovingMask(const ImageType* fixed, const ImageType* moving, const fs::path& file) {
   std::size_t masked = 0;
   using Mask = imaging::MaskType;
-  Mask::Pointer mask = imaging::cementMetricMask(fixed, moving, imaging::RegistrationOptions{}, masked);
+  Mask::Pointer mask = imaging::cementMetricMask(fixed, moving, gOptions, masked);
   auto writer = itk::ImageFileWriter<Mask>::New();
   writer->SetImageIO(itk::MetaImageIO::New());
   writer->SetInput(mask);
@@ -174,7 +175,6 @@ void runElastix(const fs::path& dir, const ImageType* fixed, const ImageType* mo
 
 bool haveElastix() { return std::system("command -v elastix > /dev/null 2>&1") == 0; }
 
-imaging::RegistrationOptions gOptions; // adjustable from the command line, for tuning runs
 bool gElastix = true;
 int gPairs = 3;
 

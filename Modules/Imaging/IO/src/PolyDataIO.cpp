@@ -11,7 +11,10 @@
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
+#include <locale>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -83,7 +86,7 @@ public:
   bool add(std::ostringstream& xml, const std::string& indent, vtkDataArray* a, const char* name,
            std::optional<vtkIdType> fieldTuples = std::nullopt) {
     const char* type = a ? xmlWordType(a) : nullptr;
-    if (!type || !a->HasStandardMemoryLayout()) return false;
+    if (!type || !a->HasStandardMemoryLayout() || !name || a->HasAComponentName()) return false;
     const std::uint64_t bytes = std::uint64_t(a->GetNumberOfValues()) * std::uint64_t(a->GetDataTypeSize());
     xml << indent << "<DataArray type=\"" << type << "\" Name=\"" << xmlEscaped(name) << "\" NumberOfComponents=\""
         << a->GetNumberOfComponents() << "\"";
@@ -110,7 +113,7 @@ public:
   }
   void write(const std::string& header, const std::string& path) const {
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-    if (!file) throw std::runtime_error(path + ": cannot create the file");
+    if (!file) throw std::runtime_error(std::string("cannot create the file (") + std::strerror(errno) + ")");
     bool ok = std::fwrite(header.data(), 1, header.size(), file.get()) == header.size();
     for (const auto& [bytes, data] : blocks_) {
       ok = ok && std::fwrite(&bytes, sizeof bytes, 1, file.get()) == 1;
@@ -120,7 +123,7 @@ public:
     ok = ok && std::fwrite(tail, 1, sizeof tail - 1, file.get()) == sizeof tail - 1;
     ok = std::fflush(file.get()) == 0 && ok;
     if (std::fclose(file.release()) != 0) ok = false;
-    if (!ok) throw std::runtime_error(path + ": could not write the points (disk full or over the file size limit?)");
+    if (!ok) throw std::runtime_error("could not write the points (disk full or over the file size limit?)");
   }
 
 private:
@@ -130,6 +133,7 @@ private:
 
 // The header and blocks of `data`, or false where some part needs VTK's writer.
 bool describeRaw(vtkPolyData* data, std::ostringstream& xml, RawPolyDataFile& raw) {
+  xml.imbue(std::locale::classic()); // no digit grouping in the counts and offsets, whatever the program's locale
   const std::uint16_t one = 1;
   const bool little = *reinterpret_cast<const std::uint8_t*>(&one) == 1;
   xml << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\""
@@ -151,6 +155,10 @@ bool describeRaw(vtkPolyData* data, std::ostringstream& xml, RawPolyDataFile& ra
       << "\" NumberOfPolys=\"" << count(cells[3]) << "\">\n";
   auto attributes = [&](vtkDataSetAttributes* d, const char* tag) {
     if (!d || d->GetNumberOfArrays() == 0) return true;
+    // What this writer does not carry goes to VTK's: the other attribute designations and unnamed arrays.
+    for (int attribute : {vtkDataSetAttributes::TENSORS, vtkDataSetAttributes::TCOORDS, vtkDataSetAttributes::GLOBALIDS,
+                          vtkDataSetAttributes::PEDIGREEIDS, vtkDataSetAttributes::TANGENTS})
+      if (d->GetAbstractAttribute(attribute)) return false;
     xml << "      <" << tag;
     if (d->GetScalars() && d->GetScalars()->GetName()) xml << " Scalars=\"" << xmlEscaped(d->GetScalars()->GetName()) << "\"";
     if (d->GetVectors() && d->GetVectors()->GetName()) xml << " Vectors=\"" << xmlEscaped(d->GetVectors()->GetName()) << "\"";

@@ -169,6 +169,25 @@ TEST(PolyDataWriter, AnArrayTheRawWriterCannotTakeGoesToVtksWriter) {
   expectSameArrays(want->GetPointData(), got->GetPointData(), "point data");
 }
 
+// An unnamed array and a global-ids designation are not the raw writer's: VTK's writer takes the file, and what
+// the reader gives back holds every value.
+TEST(PolyDataWriter, AnUnnamedArrayGoesToVtksWriter) {
+  const auto want = sample(10);
+  auto unnamed = vtkSmartPointer<vtkDoubleArray>::New();
+  unnamed->SetNumberOfValues(10);
+  for (vtkIdType i = 0; i < 10; ++i) unnamed->SetValue(i, 0.5 * double(i));
+  want->GetPointData()->AddArray(unnamed);
+  want->GetPointData()->GetArray("label <&\">")->SetName("label");
+  const fs::path path = scratch("unnamed.vtp");
+  imaging::writePolyDataUncompressed(want, path.string());
+  // VTK's writer LZ4-compresses: the file is smaller than the raw values (10 points x 53 bytes and more).
+  std::ifstream file(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("compressor"), std::string::npos) << "not VTK's writer";
+  const auto got = imaging::readPolyData(path.string());
+  ASSERT_EQ(got->GetPointData()->GetNumberOfArrays(), 5);
+}
+
 // A directory that does not exist: one error naming the file, nothing left behind.
 TEST(PolyDataWriter, AnUnwritablePathThrowsNamingIt) {
   const fs::path path = scratch("no-such-dir") / "points.vtp";
@@ -179,4 +198,5 @@ TEST(PolyDataWriter, AnUnwritablePathThrowsNamingIt) {
     EXPECT_NE(std::string(e.what()).find("points.vtp"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(path));
+  fs::remove_all(scratch("").parent_path()); // the suite's scratch folder (the last test)
 }

@@ -230,6 +230,7 @@ void runStage(SmoothedImages& images, const MetricMasks& masks, TTransform* tran
 
 MaskType::Pointer cementMetricMask(const ImageType* fixed, const ImageType* moving, const RegistrationOptions& options,
                                    std::size_t& masked) {
+  if (!fixed || !moving) throw std::invalid_argument("cement mask: null image");
   auto minmax = itk::MinimumMaximumImageCalculator<ImageType>::New();
   minmax->SetImage(fixed);
   minmax->ComputeMaximum();

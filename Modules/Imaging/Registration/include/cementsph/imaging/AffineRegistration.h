@@ -62,14 +62,14 @@ struct RegistrationResult {
   double seconds = 0.0;
 };
 
-// Throws std::runtime_error when the two volumes do not overlap in physical space.
 // The moving scan's metric mask as registerAffine makes it (options.maskCement): 0 on the cement (moving voxels
-// brighter than the fixed scan's maximum + options.cementMarginHU, grown by a ball of options.cementDilationMm),
+// at least the fixed scan's maximum + options.cementMarginHU, grown by a ball of options.cementDilationMm),
 // 1 elsewhere, on the moving scan's grid. masked: the cement voxels (0 = nothing to mask: the mask is all 1).
 // imaging-bench hands elastix the same mask, so that the two registrations look at the same voxels.
 MaskType::Pointer cementMetricMask(const ImageType* fixed, const ImageType* moving, const RegistrationOptions& options,
                                    std::size_t& masked);
 
+// Throws std::runtime_error when the two volumes do not overlap in physical space.
 RegistrationResult registerAffine(const ImageType* fixed, const ImageType* moving,
                                   const RegistrationOptions& options = {});
 
