@@ -27,6 +27,8 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
+#include <string>
 #include <vector>
 
 using namespace cementsph;
@@ -496,5 +498,97 @@ TEST(ParticleDarcyStepping, TheClosedSumsInterpolantIsExactOnQuadratics) {
       plain += value[c] * ((c & 1) ? t[0] : 1 - t[0]) * (((c >> 1) & 1) ? t[1] : 1 - t[1]) * (((c >> 2) & 1) ? t[2] : 1 - t[2]);
     for (int a = 0; a < 3; ++a) error += 0.5 * A(a, a) * t[a] * (1 - t[a]) * spacing[a] * spacing[a];
     EXPECT_NEAR(plain - f(x), error, 1e-12);
+  }
+}
+
+// The colour pass (particle_darcy::colourRun) lists a voxel once, and only once it has colour. On the phantom's
+// kernel (d = 1.14 mm, h = 1.5 d) a voxel at r^2 one float below (2h)^2 lies inside the support in single
+// precision, but q = r / h rounds to 2 there, so its weight is 0 (checked here first). Two particles reaching it (the
+// four-voxel SSE path, and the one-voxel scalar path) must leave it unlisted with no colour; before, each listed it
+// (its colour stayed 0), and the report's colour and label volumes counted it twice. A voxel at r = h, reached by
+// the same two particles, is listed once with 2 d^3 W(h) = 2 d^3 21 / (16 pi h^3) x 3 / 16 (within 1e-6: float).
+TEST(ParticleDarcyStepping, AVoxelIsListedOnceAndOnlyWithColour) {
+  const double d = 1.14e-3, h = 1.5 * d;
+  const float invH = float(1.0 / h), cs2 = float(4 * h * h), wn = float(d * d * d * 21.0 / (16 * kPi * h * h * h));
+  const float edge = std::nextafter(cs2, 0.0f);
+  ASSERT_LT(edge, cs2);
+  ASSERT_LE(1.0f - 0.5f * (std::sqrt(edge) * invH), 0.0f); // the premise: inside in float, weight 0
+  using cementsph::scene::particle_darcy::colourRun;
+  for (int n : {4, 1}) { // the SSE path (four voxels, the others beyond the support) and the scalar one
+    std::vector<float> colour(4, 0.0f);
+    std::vector<std::size_t> touched;
+    for (int particle = 0; particle < 2; ++particle) colourRun(colour.data(), 10, n, 0.0f, 4e-3f, edge, invH, wn, cs2, touched);
+    EXPECT_TRUE(touched.empty()) << n << " voxels: listed " << touched.size() << " times";
+    for (float c : colour) EXPECT_EQ(c, 0.0f);
+    const float atH = float(h * h);
+    for (int particle = 0; particle < 2; ++particle) colourRun(colour.data(), 10, n, 0.0f, 4e-3f, atH, invH, wn, cs2, touched);
+    if (touched.size() != 1u) {
+      ADD_FAILURE() << n << " voxels: " << touched.size() << " listed, not 1";
+      continue;
+    }
+    EXPECT_EQ(touched[0], 10u);
+    const double expected = 2 * d * d * d * 21.0 / (16 * kPi * h * h * h) * 3.0 / 16.0;
+    EXPECT_NEAR(colour[0], expected, 1e-6 * expected);
+  }
+}
+
+// A voxel listed in one step and not in the next reads a share of 0 (particle_darcy::updateShares), as its colour
+// is. The case: a voxel first at r = h from a particle (listed, share > 0), then at r = 2h (1 - 1e-10) from it: inside
+// the support in double (the ghosts' test, checked here) but outside in float (the colour pass's, checked: no
+// colour, not listed). Before, its share was that of the first step.
+TEST(ParticleDarcyStepping, AVoxelNoLongerListedHasNoShare) {
+  const double d = 1.14e-3, h = 1.5 * d, r = 2 * h * (1 - 1e-10);
+  const float invH = float(1.0 / h), cs2 = float(4 * h * h), wn = float(d * d * d * 21.0 / (16 * kPi * h * h * h));
+  using namespace cementsph::scene::particle_darcy;
+  std::vector<float> colour(4, 0.0f);
+  std::vector<double> share(4, 0.0);
+  const auto shareOf = [&](std::size_t v) { return double(colour[v]) / (d * d * d * 21.0 / (16 * kPi * h * h * h)); };
+  std::vector<std::size_t> first, second;
+  colourRun(colour.data(), 0, 1, float(h), 4e-3f, 0.0f, invH, wn, cs2, first);
+  updateShares(share, {}, first, shareOf);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_NEAR(share[0], 3.0 / 16.0, 1e-6); // W(h) / W(0)
+  for (std::size_t v : first) colour[v] = 0.0f; // the next step's colour pass starts from 0 on the listed voxels
+  ASSERT_LT(r * r, 4 * h * h); // the premise: inside in double ...
+  colourRun(colour.data(), 0, 1, float(r), 4e-3f, 0.0f, invH, wn, cs2, second);
+  ASSERT_TRUE(second.empty()); // ... outside in float
+  updateShares(share, first, second, shareOf);
+  EXPECT_EQ(share[0], 0.0);
+}
+
+// A particle whose position is not finite stops the run with sph::SimulationError naming it and why
+// (particle_darcy::fieldCell, read by closedSumsAt), as does a sum that is not finite (requireFiniteSum); before,
+// a NaN position indexed the closed sums' field with the integer the NaN converts to. A finite position: its cell
+// and cell coordinates by hand (origin 0, spacing 0.5, 4 nodes per axis: (0.6, 1.9, -0.7) -> cell (1, 3, -1),
+// t = (0.2, 0.8, 0), z clamped to the padded grid's -1).
+TEST(ParticleDarcyStepping, ANonFinitePositionOrSumStopsTheRunSayingWhere) {
+  using namespace cementsph::scene::particle_darcy;
+  const Eigen::Vector3d origin(0, 0, 0), spacing(0.5, 0.5, 0.5);
+  const int size[3] = {4, 4, 4};
+  const auto where = [] { return std::string("particle 7 at step 12"); };
+  int c[3];
+  Eigen::Vector3d t;
+  fieldCell(Eigen::Vector3d(0.6, 1.9, -0.7), origin, spacing, size, c, t, where);
+  EXPECT_EQ(c[0], 1);
+  EXPECT_EQ(c[1], 3);
+  EXPECT_EQ(c[2], -1);
+  EXPECT_NEAR(t[0], 0.2, 1e-12);
+  EXPECT_NEAR(t[1], 0.8, 1e-12);
+  EXPECT_NEAR(t[2], 0.0, 1e-12);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.6, nan, 0.2), Eigen::Vector3d(std::numeric_limits<double>::infinity(), 0, 0)}) {
+    try {
+      fieldCell(p, origin, spacing, size, c, t, where);
+      ADD_FAILURE() << "no error for a position that is not finite";
+    } catch (const cementsph::sph::SimulationError& e) {
+      EXPECT_NE(std::string(e.what()).find("particle 7 at step 12: its position is not finite"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(requireFiniteSum(0.25, "number density", where));
+  try {
+    requireFiniteSum(nan, "number density", where);
+    ADD_FAILURE() << "no error for a sum that is not finite";
+  } catch (const cementsph::sph::SimulationError& e) {
+    EXPECT_NE(std::string(e.what()).find("particle 7 at step 12: its number density is not finite"), std::string::npos) << e.what();
   }
 }

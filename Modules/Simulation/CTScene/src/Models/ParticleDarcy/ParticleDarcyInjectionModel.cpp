@@ -132,9 +132,6 @@
 
 #include <Eigen/Dense>
 #include <vtkCellArray.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #include <vtkDoubleArray.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -592,15 +589,18 @@ private:
     for (int a = 0; a < kFieldValues; ++a) node[a] = float(s[a]);
     return node;
   }
-  ClosedSums closedSumsAt(const Eigen::Vector3d& p) {
+  // A position or sum that is not finite (a run gone unstable) throws sph::SimulationError naming the particle, the
+  // step and the time (particle_darcy::fieldCell, requireFiniteSum): a NaN would index the field out of its bounds.
+  ClosedSums closedSumsAt(std::size_t particle) {
     const sph::VoxelGrid& g = solid_->grid;
+    const Eigen::Vector3d& p = x_[particle];
+    const auto where = [&] {
+      return "particle-darcy: particle " + std::to_string(particle) + " of " + std::to_string(x_.size()) + " at step " +
+             std::to_string(steps_) + " (t = " + std::to_string(time_) + " s), the closed space's sums (closedSumsAt)";
+    };
     int c[3];
-    double t[3];
-    for (int a = 0; a < 3; ++a) {
-      const double u = std::clamp((p[a] - g.origin[a]) / g.spacing[a], -1.0, double(g.size[a]));
-      c[a] = std::min(int(std::floor(u)), g.size[a] - 1);
-      t[a] = u - c[a];
-    }
+    Eigen::Vector3d t;
+    particle_darcy::fieldCell(p, g.origin, g.spacing, g.size.data(), c, t, where);
     // Each sum with its gradient (the number density's is the concentration gradient / d^3; the second moment's
     // and the concentration gradient's Jacobian are stored): particle_darcy::blendedTrilinear, exact on quadratics.
     double num[8], missing[8], gradA[3][8];
@@ -616,11 +616,13 @@ private:
       gradGrad[2][corner] = Eigen::Vector3d(J[4], J[5], J[2]);
       for (int a = 0; a < 3; ++a) gradA[a][corner] = node[1 + a];
     }
-    const Eigen::Vector3d tv(t[0], t[1], t[2]);
     ClosedSums out;
-    out.num = particle_darcy::blendedTrilinear(num, numGrad, tv, g.spacing);
-    out.missing = particle_darcy::blendedTrilinear(missing, missingGrad, tv, g.spacing);
-    for (int a = 0; a < 3; ++a) out.grad[a] = particle_darcy::blendedTrilinear(gradA[a], gradGrad[a], tv, g.spacing);
+    out.num = particle_darcy::blendedTrilinear(num, numGrad, t, g.spacing);
+    out.missing = particle_darcy::blendedTrilinear(missing, missingGrad, t, g.spacing);
+    for (int a = 0; a < 3; ++a) out.grad[a] = particle_darcy::blendedTrilinear(gradA[a], gradGrad[a], t, g.spacing);
+    particle_darcy::requireFiniteSum(out.num, "number density", where);
+    particle_darcy::requireFiniteSum(out.missing, "second moment", where);
+    particle_darcy::requireFiniteSum(out.grad.squaredNorm(), "concentration gradient", where);
     return out;
   }
   // The open share of a kernel support, 1 - (closed share), bounded below so that a voxel walled in on almost
@@ -675,42 +677,11 @@ private:
     }
   }
 
-  // The particle's colour d^3 W(r) added to n consecutive open voxels of a row (the first at colour[0], region
-  // index v0; rx0 the first one's x offset from the particle, ryz2 the row's squared y and z offsets), in single
-  // precision (the colour is stored as float), four voxels at a time where SSE2 is there (x86-64 always); a voxel
-  // past the support adds 0. A voxel is listed in touched when a particle's support first reaches it (r < 2h).
+  // The particle's colour d^3 W(r) added to n consecutive open voxels of a row (particle_darcy::colourRun: a voxel
+  // is listed in touched when it first gets a colour above 0).
   void colourRun(float* colour, std::size_t v0, int n, float rx0, float ryz2, std::vector<std::size_t>& touched) const {
-    const float sx = float(solid_->grid.spacing[0]), invH = float(kernel_.invH), wn = float(volume_ * kernel_.wNorm);
-    const float cs2 = float(kernel_.support * kernel_.support);
-    int k = 0;
-#if defined(__SSE2__)
-    const __m128 lane = _mm_set_ps(3, 2, 1, 0), vsx = _mm_set1_ps(sx), vrx0 = _mm_set1_ps(rx0), vryz = _mm_set1_ps(ryz2);
-    const __m128 vinvH = _mm_set1_ps(invH), vwn = _mm_set1_ps(wn), vcs2 = _mm_set1_ps(cs2), zero = _mm_setzero_ps();
-    const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), two = _mm_set1_ps(2.0f);
-    for (; k + 4 <= n; k += 4) {
-      const __m128 rx = _mm_add_ps(vrx0, _mm_mul_ps(vsx, _mm_add_ps(_mm_set1_ps(float(k)), lane)));
-      const __m128 r2 = _mm_add_ps(_mm_mul_ps(rx, rx), vryz);
-      const __m128 q = _mm_mul_ps(_mm_sqrt_ps(r2), vinvH);
-      const __m128 t = _mm_max_ps(zero, _mm_sub_ps(one, _mm_mul_ps(half, q)));
-      const __m128 t2 = _mm_mul_ps(t, t);
-      // Outside the support (r^2 >= 4 h^2) exactly 0: q's rounding can leave t a hair above 0 there, and a voxel
-      // given colour without being listed in touched would keep it into the next step.
-      const __m128 inside = _mm_cmplt_ps(r2, vcs2);
-      const __m128 w = _mm_and_ps(inside, _mm_mul_ps(_mm_mul_ps(vwn, _mm_mul_ps(t2, t2)), _mm_add_ps(_mm_mul_ps(two, q), one)));
-      const __m128 old = _mm_loadu_ps(colour + k);
-      if (const int first = _mm_movemask_ps(_mm_and_ps(inside, _mm_cmpeq_ps(old, zero))))
-        for (int l = 0; l < 4; ++l)
-          if (first & (1 << l)) touched.push_back(v0 + std::size_t(k + l));
-      _mm_storeu_ps(colour + k, _mm_add_ps(old, w));
-    }
-#endif
-    for (; k < n; ++k) {
-      const float rx = rx0 + sx * float(k), r2 = rx * rx + ryz2;
-      if (!(r2 < cs2)) continue;
-      const float q = std::sqrt(r2) * invH, t = 1.0f - 0.5f * q, t2 = t * t;
-      if (colour[k] == 0.0f) touched.push_back(v0 + std::size_t(k));
-      colour[k] += wn * t2 * t2 * (2.0f * q + 1.0f);
-    }
+    particle_darcy::colourRun(colour, v0, n, rx0, float(solid_->grid.spacing[0]), ryz2, float(kernel_.invH),
+                              float(volume_ * kernel_.wNorm), float(kernel_.support * kernel_.support), touched);
   }
 
   // The voxels of row (j, k) whose centres may lie within the kernel support of a point at x = px, given the
@@ -1024,13 +995,15 @@ private:
     // reset (touched_): the cost follows the cement, not the region.
     const sph::VoxelGrid& g = solid_->grid;
     occupied_.resize(g.count(), 0);
-    for (std::size_t v : touched_) occupied_[v] = 0;
-    particleColour(colour_, touched_);
     share_.resize(g.count(), 0.0);
-    for (std::size_t v : touched_) { // every open voxel in a particle's support is touched: its share kept for the ghosts
-      share_[v] = closed_[v] ? 0.0 : cementShare(v);
-      occupied_[v] = !closed_[v] && share_[v] >= 0.5;
-    }
+    for (std::size_t v : touched_) occupied_[v] = 0;
+    previousTouched_.assign(touched_.begin(), touched_.end());
+    particleColour(colour_, touched_);
+    // Every voxel with colour is listed (touched_) and keeps its share for the ghosts; every other reads 0, the last
+    // step's list included (particle_darcy::updateShares).
+    particle_darcy::updateShares(share_, previousTouched_, touched_,
+                                 [this](std::size_t v) { return closed_[v] ? 0.0 : cementShare(v); });
+    for (std::size_t v : touched_) occupied_[v] = !closed_[v] && share_[v] >= 0.5;
     auto stamp = [&](const Eigen::Vector3d& p, double radius) {
       int lo[3], hi[3];
       voxelBox(p, radius, lo, hi);
@@ -1079,7 +1052,7 @@ private:
     // the static field on the voxel centres (closedSumsAt); the nodes a particle needs are computed here, before the
     // threads, the first time any particle needs them.
     std::vector<ClosedSums> closedSums(n);
-    for (std::size_t i = 0; i < n; ++i) closedSums[i] = closedSumsAt(x_[i]);
+    for (std::size_t i = 0; i < n; ++i) closedSums[i] = closedSumsAt(i);
 #pragma omp parallel for schedule(dynamic, 16)
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Vector3d& p = x_[i];
@@ -1576,7 +1549,7 @@ private:
   std::vector<std::unique_ptr<std::atomic<std::uint8_t>[]>> sightBits_;
   std::vector<StencilEntry> stencil_;
   int pad_ = 0, padSize_[3] = {1, 1, 1};
-  std::vector<std::size_t> touched_;
+  std::vector<std::size_t> touched_, previousTouched_; // the voxels with colour (and the outlet ball's), this step and the last
   std::size_t shaftVoxels_ = 0, steps_ = 0, subSteps_ = 0, frontParticles_ = 0, subStepsClamped_ = 0, cappedSubStepMoves_ = 0;
   std::vector<Eigen::Vector3d> seeds_, candidates_;
   int cells_[3] = {1, 1, 1};

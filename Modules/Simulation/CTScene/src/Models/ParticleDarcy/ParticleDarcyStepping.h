@@ -1,11 +1,17 @@
 // The particle-darcy model's time stepping rules (ParticleDarcyInjectionModel.cpp), apart so that its tests
 // (ParticleDarcyTest) can hold each rule to a number without running a scene. Header-only; used by that model only.
 #pragma once
+#include "cementsph/sph/Simulation.h"
+
 #include <Eigen/Dense>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace cementsph::scene::particle_darcy {
@@ -91,6 +97,86 @@ inline double blendedTrilinear(const double value[8], const Eigen::Vector3d grad
     slope += w * grad[c].dot(dx);
   }
   return plain + 0.5 * slope;
+}
+
+// The cell of a static field's grid (node (i, j, k) at origin + (i, j, k) spacing, size nodes per axis) that
+// blendedTrilinear reads at p: its lower corner c (clamped so that the cell lies in -1 .. size per axis) and p's cell
+// coordinates t. A position that is not finite is a run gone unstable: it throws sph::SimulationError with
+// where() (a callable returning the particle, its step and time: built only then) and why, instead of indexing the
+// field with the integer a NaN converts to (ParticleDarcyInjectionModel.cpp: closedSumsAt).
+template <class Where>
+void fieldCell(const Eigen::Vector3d& p, const Eigen::Vector3d& origin, const Eigen::Vector3d& spacing, const int size[3],
+               int c[3], Eigen::Vector3d& t, const Where& where) {
+  if (!p.allFinite())
+    throw sph::SimulationError(where() + ": its position is not finite (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
+                               ", " + std::to_string(p.z()) + " m): the run went unstable");
+  for (int a = 0; a < 3; ++a) {
+    const double u = std::clamp((p[a] - origin[a]) / spacing[a], -1.0, double(size[a]));
+    c[a] = std::min(int(std::floor(u)), size[a] - 1);
+    t[a] = u - c[a];
+  }
+}
+// A sum the run goes on with (the closed space's number density, second moment, concentration gradient at a
+// particle): one that is not finite throws sph::SimulationError naming where() and what, rather than entering the
+// pressure matrix.
+template <class Where>
+void requireFiniteSum(double value, const char* what, const Where& where) {
+  if (!std::isfinite(value))
+    throw sph::SimulationError(where() + ": its " + what + " is not finite (" + std::to_string(value) + "): the run went unstable");
+}
+
+// The particles' colour d^3 W(r) of one particle added to n consecutive open voxels of a grid row (the first at
+// colour[0], region index v0; rx0 the first one's x offset from the particle, sx the voxels' x spacing, ryz2 the
+// row's squared y and z offsets; invH = 1 / h, wn = d^3 x W's norm, cs2 = (2h)^2), in single precision (the colour is
+// stored as float), four voxels at a time where SSE2 is there (x86-64 always); a voxel past the support adds 0.
+// A voxel is listed in touched when it first gets a colour above 0: so the listed voxels are exactly those with
+// colour > 0, each once. Before, a voxel was listed when a particle's support first reached it (r^2 < (2h)^2 in
+// float), though its weight could round to 0 there (q = r / h rounds to 2: the kernel's factor 1 - q/2 is 0): its
+// colour stayed 0, and the next particle to reach it listed it again (the report's colour and label volumes summed
+// it twice).
+inline void colourRun(float* colour, std::size_t v0, int n, float rx0, float sx, float ryz2, float invH, float wn, float cs2,
+                      std::vector<std::size_t>& touched) {
+  int k = 0;
+#if defined(__SSE2__)
+  const __m128 lane = _mm_set_ps(3, 2, 1, 0), vsx = _mm_set1_ps(sx), vrx0 = _mm_set1_ps(rx0), vryz = _mm_set1_ps(ryz2);
+  const __m128 vinvH = _mm_set1_ps(invH), vwn = _mm_set1_ps(wn), vcs2 = _mm_set1_ps(cs2), zero = _mm_setzero_ps();
+  const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), two = _mm_set1_ps(2.0f);
+  for (; k + 4 <= n; k += 4) {
+    const __m128 rx = _mm_add_ps(vrx0, _mm_mul_ps(vsx, _mm_add_ps(_mm_set1_ps(float(k)), lane)));
+    const __m128 r2 = _mm_add_ps(_mm_mul_ps(rx, rx), vryz);
+    const __m128 q = _mm_mul_ps(_mm_sqrt_ps(r2), vinvH);
+    const __m128 t = _mm_max_ps(zero, _mm_sub_ps(one, _mm_mul_ps(half, q)));
+    const __m128 t2 = _mm_mul_ps(t, t);
+    // Outside the support (r^2 >= 4 h^2) exactly 0: q's rounding can leave t a hair above 0 there.
+    const __m128 inside = _mm_cmplt_ps(r2, vcs2);
+    const __m128 w = _mm_and_ps(inside, _mm_mul_ps(_mm_mul_ps(vwn, _mm_mul_ps(t2, t2)), _mm_add_ps(_mm_mul_ps(two, q), one)));
+    const __m128 old = _mm_loadu_ps(colour + k);
+    if (const int first = _mm_movemask_ps(_mm_and_ps(_mm_cmpgt_ps(w, zero), _mm_cmpeq_ps(old, zero))))
+      for (int l = 0; l < 4; ++l)
+        if (first & (1 << l)) touched.push_back(v0 + std::size_t(k + l));
+    _mm_storeu_ps(colour + k, _mm_add_ps(old, w));
+  }
+#endif
+  for (; k < n; ++k) {
+    const float rx = rx0 + sx * float(k), r2 = rx * rx + ryz2;
+    if (!(r2 < cs2)) continue;
+    const float q = std::sqrt(r2) * invH, t = 1.0f - 0.5f * q, t2 = t * t;
+    const float w = wn * t2 * t2 * (2.0f * q + 1.0f);
+    if (colour[k] == 0.0f && w > 0.0f) touched.push_back(v0 + std::size_t(k));
+    colour[k] += w;
+  }
+}
+
+// The cement's share of the open space per region voxel for this step (share): the voxels listed last step
+// (previous) are set to 0 first, then each voxel listed now (current: those with colour > 0, colourRun) takes
+// shareOf(v). So every voxel not listed now reads 0, as its colour is. Before, only the listed voxels were written:
+// a voxel listed in an earlier step and not now kept its old share, and the ghosts' pass, which decides a voxel's
+// support edge in double where the colour pass does in float, could read it (weight ~1e-21 of a ghost's).
+template <class ShareOf>
+void updateShares(std::vector<double>& share, const std::vector<std::size_t>& previous, const std::vector<std::size_t>& current,
+                  const ShareOf& shareOf) {
+  for (std::size_t v : previous) share[v] = 0.0;
+  for (std::size_t v : current) share[v] = shareOf(v);
 }
 
 } // namespace cementsph::scene::particle_darcy
