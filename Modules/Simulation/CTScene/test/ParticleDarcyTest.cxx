@@ -25,10 +25,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace cementsph;
@@ -514,14 +516,16 @@ TEST(ParticleDarcyStepping, AVoxelIsListedOnceAndOnlyWithColour) {
   ASSERT_LT(edge, cs2);
   ASSERT_LE(1.0f - 0.5f * (std::sqrt(edge) * invH), 0.0f); // the premise: inside in float, weight 0
   using cementsph::scene::particle_darcy::colourRun;
-  for (int n : {4, 1}) { // the SSE path (four voxels, the others beyond the support) and the scalar one
+  const cementsph::scene::particle_darcy::ColourKernel kern(4e-3f, invH, wn, cs2);
+  // The four-lane path (four voxels, the others beyond the support), the run's tail in four lanes, and one at a time.
+  for (const auto& [n, room] : {std::pair<int, std::size_t>{4, 4}, {1, 4}, {1, 1}}) {
     std::vector<float> colour(4, 0.0f);
     std::vector<std::size_t> touched;
-    for (int particle = 0; particle < 2; ++particle) colourRun(colour.data(), 10, n, 0.0f, 4e-3f, edge, invH, wn, cs2, touched);
+    for (int particle = 0; particle < 2; ++particle) colourRun(colour.data(), 10, n, room, 0.0f, edge, kern, touched);
     EXPECT_TRUE(touched.empty()) << n << " voxels: listed " << touched.size() << " times";
     for (float c : colour) EXPECT_EQ(c, 0.0f);
     const float atH = float(h * h);
-    for (int particle = 0; particle < 2; ++particle) colourRun(colour.data(), 10, n, 0.0f, 4e-3f, atH, invH, wn, cs2, touched);
+    for (int particle = 0; particle < 2; ++particle) colourRun(colour.data(), 10, n, room, 0.0f, atH, kern, touched);
     if (touched.size() != 1u) {
       ADD_FAILURE() << n << " voxels: " << touched.size() << " listed, not 1";
       continue;
@@ -532,6 +536,34 @@ TEST(ParticleDarcyStepping, AVoxelIsListedOnceAndOnlyWithColour) {
   }
 }
 
+// A run's last n % 4 voxels are summed four lanes at once where the colour array has room past the run, with the
+// one-voxel formula: the same bits as one voxel at a time (the figures do not depend on the array's room), and the
+// lanes past the run are stored unchanged. 2000 runs of 1-3 voxels (and 5-7: four lanes, then the tail) at random
+// offsets within and about the phantom kernel's support, against the same run summed with no room (one at a time).
+TEST(ParticleDarcyStepping, TheColourRunsTailIsTheSameBitsInFourLanes) {
+  const double d = 1.14e-3, h = 1.5 * d;
+  const cementsph::scene::particle_darcy::ColourKernel kern(0.47e-3f, float(1.0 / h), float(d * d * d * 21.0 / (16 * kPi * h * h * h)),
+                                                           float(4 * h * h));
+  std::uint32_t state = 12345u;
+  const auto uniform01 = [&] { return double((state = state * 1664525u + 1013904223u) >> 8) / double(1u << 24); };
+  int differing = 0, lanesChanged = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int n = 1 + trial % 7;
+    if (n == 4) continue;
+    const float rx0 = float((uniform01() * 2 - 1) * 2.2 * h), ryz2 = float(uniform01() * 4.4 * h * h);
+    std::vector<float> lanes(12, 0.0f), single(12, 0.0f);
+    for (int k = 0; k < 12; ++k) lanes[std::size_t(k)] = single[std::size_t(k)] = k >= n ? 7.0f : (trial % 2 ? 0.0f : 0.25f);
+    std::vector<std::size_t> touchedLanes, touchedSingle;
+    cementsph::scene::particle_darcy::colourRun(lanes.data(), 0, n, lanes.size(), rx0, ryz2, kern, touchedLanes);
+    cementsph::scene::particle_darcy::colourRun(single.data(), 0, n, std::size_t(n), rx0, ryz2, kern, touchedSingle);
+    for (int k = 0; k < n; ++k) differing += lanes[std::size_t(k)] != single[std::size_t(k)];
+    for (int k = n; k < 12; ++k) lanesChanged += lanes[std::size_t(k)] != 7.0f;
+    EXPECT_EQ(touchedLanes, touchedSingle) << "run of " << n;
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_EQ(lanesChanged, 0);
+}
+
 // A voxel listed in one step and not in the next reads a share of 0 (particle_darcy::updateShares), as its colour
 // is. The case: a voxel first at r = h from a particle (listed, share > 0), then at r = 2h (1 - 1e-10) from it: inside
 // the support in double (the ghosts' test, checked here) but outside in float (the colour pass's, checked: no
@@ -540,17 +572,18 @@ TEST(ParticleDarcyStepping, AVoxelNoLongerListedHasNoShare) {
   const double d = 1.14e-3, h = 1.5 * d, r = 2 * h * (1 - 1e-10);
   const float invH = float(1.0 / h), cs2 = float(4 * h * h), wn = float(d * d * d * 21.0 / (16 * kPi * h * h * h));
   using namespace cementsph::scene::particle_darcy;
+  const ColourKernel kern(4e-3f, invH, wn, cs2);
   std::vector<float> colour(4, 0.0f);
   std::vector<double> share(4, 0.0);
   const auto shareOf = [&](std::size_t v) { return double(colour[v]) / (d * d * d * 21.0 / (16 * kPi * h * h * h)); };
   std::vector<std::size_t> first, second;
-  colourRun(colour.data(), 0, 1, float(h), 4e-3f, 0.0f, invH, wn, cs2, first);
+  colourRun(colour.data(), 0, 1, colour.size(), float(h), 0.0f, kern, first);
   updateShares(share, {}, first, shareOf);
   ASSERT_EQ(first.size(), 1u);
   EXPECT_NEAR(share[0], 3.0 / 16.0, 1e-6); // W(h) / W(0)
   for (std::size_t v : first) colour[v] = 0.0f; // the next step's colour pass starts from 0 on the listed voxels
   ASSERT_LT(r * r, 4 * h * h); // the premise: inside in double ...
-  colourRun(colour.data(), 0, 1, float(r), 4e-3f, 0.0f, invH, wn, cs2, second);
+  colourRun(colour.data(), 0, 1, colour.size(), float(r), 0.0f, kern, second);
   ASSERT_TRUE(second.empty()); // ... outside in float
   updateShares(share, first, second, shareOf);
   EXPECT_EQ(share[0], 0.0);

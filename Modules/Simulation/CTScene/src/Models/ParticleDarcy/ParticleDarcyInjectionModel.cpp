@@ -652,6 +652,8 @@ private:
     colour.resize(g.count(), 0.0f);
     for (std::size_t v : touched) colour[v] = 0.0f;
     touched.clear();
+    const particle_darcy::ColourKernel kern(float(g.spacing[0]), float(kernel_.invH), float(volume_ * kernel_.wNorm),
+                                            float(kernel_.support * kernel_.support));
     for (const auto& p : x_) {
       int lo[3], hi[3];
       voxelBox(p, cs, lo, hi);
@@ -669,19 +671,13 @@ private:
               continue;
             }
             const int n = std::min(int(openRun_[v]), i1 - i + 1); // an open run, summed four voxels at a time
-            colourRun(colour.data() + v, v, n, float((g.origin[0] + g.spacing[0] * i) - p[0]), float(ry2 + rz2), touched);
+            particle_darcy::colourRun(colour.data() + v, v, n, colour.size() - v, float((g.origin[0] + g.spacing[0] * i) - p[0]),
+                                      float(ry2 + rz2), kern, touched);
             i += n;
           }
         }
       }
     }
-  }
-
-  // The particle's colour d^3 W(r) added to n consecutive open voxels of a row (particle_darcy::colourRun: a voxel
-  // is listed in touched when it first gets a colour above 0).
-  void colourRun(float* colour, std::size_t v0, int n, float rx0, float ryz2, std::vector<std::size_t>& touched) const {
-    particle_darcy::colourRun(colour, v0, n, rx0, float(solid_->grid.spacing[0]), ryz2, float(kernel_.invH),
-                              float(volume_ * kernel_.wNorm), float(kernel_.support * kernel_.support), touched);
   }
 
   // The voxels of row (j, k) whose centres may lie within the kernel support of a point at x = px, given the

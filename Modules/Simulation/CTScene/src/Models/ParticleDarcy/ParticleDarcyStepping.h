@@ -1,5 +1,6 @@
-// The particle-darcy model's time stepping rules (ParticleDarcyInjectionModel.cpp), apart so that its tests
-// (ParticleDarcyTest) can hold each rule to a number without running a scene. Header-only; used by that model only.
+// The particle-darcy model's time stepping rules, its closed sums' interpolant and cell lookup, and its colour
+// pass's pieces (ParticleDarcyInjectionModel.cpp), apart so that its tests (ParticleDarcyTest) can hold each rule to a
+// number without running a scene. Header-only; used by that model only.
 #pragma once
 #include "cementsph/sph/Simulation.h"
 
@@ -125,43 +126,75 @@ void requireFiniteSum(double value, const char* what, const Where& where) {
     throw sph::SimulationError(where() + ": its " + what + " is not finite (" + std::to_string(value) + "): the run went unstable");
 }
 
+// The kernel of the colour pass (colourRun) in single precision: the voxels' x spacing sx, invH = 1 / h,
+// wn = d^3 x W's norm, cs2 = (2h)^2, and their SSE2 broadcasts, made once per pass.
+struct ColourKernel {
+  float sx = 1, invH = 1, wn = 1, cs2 = 1;
+#if defined(__SSE2__)
+  __m128 vsx, vinvH, vwn, vcs2;
+#endif
+  ColourKernel(float spacingX, float inverseH, float norm, float support2) : sx(spacingX), invH(inverseH), wn(norm), cs2(support2) {
+#if defined(__SSE2__)
+    vsx = _mm_set1_ps(sx), vinvH = _mm_set1_ps(invH), vwn = _mm_set1_ps(wn), vcs2 = _mm_set1_ps(cs2);
+#endif
+  }
+};
+
 // The particles' colour d^3 W(r) of one particle added to n consecutive open voxels of a grid row (the first at
-// colour[0], region index v0; rx0 the first one's x offset from the particle, sx the voxels' x spacing, ryz2 the
-// row's squared y and z offsets; invH = 1 / h, wn = d^3 x W's norm, cs2 = (2h)^2), in single precision (the colour is
-// stored as float), four voxels at a time where SSE2 is there (x86-64 always); a voxel past the support adds 0.
+// colour[0], region index v0; room: the voxels from colour[0] to the array's end; rx0 the first one's x offset from
+// the particle, ryz2 the row's squared y and z offsets), in single precision (the colour is stored as float), four
+// voxels at a time where SSE2 is there (x86-64 always); a voxel past the support adds 0. The run's last n % 4 voxels
+// take the scalar formula (1 - q/2 unclamped, d^3 W's factors multiplied left to right), also four lanes at once
+// where the array has room (the lanes past the run add 0 and are stored unchanged), so each voxel's colour is the
+// same bits as summed one voxel at a time; the run's first voxels take the four-lane formula (1 - q/2 clamped at 0).
 // A voxel is listed in touched when it first gets a colour above 0: so the listed voxels are exactly those with
 // colour > 0, each once. Before, a voxel was listed when a particle's support first reached it (r^2 < (2h)^2 in
 // float), though its weight could round to 0 there (q = r / h rounds to 2: the kernel's factor 1 - q/2 is 0): its
 // colour stayed 0, and the next particle to reach it listed it again (the report's colour and label volumes summed
 // it twice).
-inline void colourRun(float* colour, std::size_t v0, int n, float rx0, float sx, float ryz2, float invH, float wn, float cs2,
+inline void colourRun(float* colour, std::size_t v0, int n, std::size_t room, float rx0, float ryz2, const ColourKernel& kern,
                       std::vector<std::size_t>& touched) {
   int k = 0;
 #if defined(__SSE2__)
-  const __m128 lane = _mm_set_ps(3, 2, 1, 0), vsx = _mm_set1_ps(sx), vrx0 = _mm_set1_ps(rx0), vryz = _mm_set1_ps(ryz2);
-  const __m128 vinvH = _mm_set1_ps(invH), vwn = _mm_set1_ps(wn), vcs2 = _mm_set1_ps(cs2), zero = _mm_setzero_ps();
+  const __m128 lane = _mm_set_ps(3, 2, 1, 0), vrx0 = _mm_set1_ps(rx0), vryz = _mm_set1_ps(ryz2), zero = _mm_setzero_ps();
   const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), two = _mm_set1_ps(2.0f);
   for (; k + 4 <= n; k += 4) {
-    const __m128 rx = _mm_add_ps(vrx0, _mm_mul_ps(vsx, _mm_add_ps(_mm_set1_ps(float(k)), lane)));
+    const __m128 rx = _mm_add_ps(vrx0, _mm_mul_ps(kern.vsx, _mm_add_ps(_mm_set1_ps(float(k)), lane)));
     const __m128 r2 = _mm_add_ps(_mm_mul_ps(rx, rx), vryz);
-    const __m128 q = _mm_mul_ps(_mm_sqrt_ps(r2), vinvH);
+    const __m128 q = _mm_mul_ps(_mm_sqrt_ps(r2), kern.vinvH);
     const __m128 t = _mm_max_ps(zero, _mm_sub_ps(one, _mm_mul_ps(half, q)));
     const __m128 t2 = _mm_mul_ps(t, t);
     // Outside the support (r^2 >= 4 h^2) exactly 0: q's rounding can leave t a hair above 0 there.
-    const __m128 inside = _mm_cmplt_ps(r2, vcs2);
-    const __m128 w = _mm_and_ps(inside, _mm_mul_ps(_mm_mul_ps(vwn, _mm_mul_ps(t2, t2)), _mm_add_ps(_mm_mul_ps(two, q), one)));
+    const __m128 inside = _mm_cmplt_ps(r2, kern.vcs2);
+    const __m128 w = _mm_and_ps(inside, _mm_mul_ps(_mm_mul_ps(kern.vwn, _mm_mul_ps(t2, t2)), _mm_add_ps(_mm_mul_ps(two, q), one)));
     const __m128 old = _mm_loadu_ps(colour + k);
     if (const int first = _mm_movemask_ps(_mm_and_ps(_mm_cmpgt_ps(w, zero), _mm_cmpeq_ps(old, zero))))
       for (int l = 0; l < 4; ++l)
         if (first & (1 << l)) touched.push_back(v0 + std::size_t(k + l));
     _mm_storeu_ps(colour + k, _mm_add_ps(old, w));
   }
+  if (k < n && std::size_t(k) + 4 <= room) { // the tail, four lanes with the scalar formula below
+    const __m128 valid = _mm_cmplt_ps(lane, _mm_set1_ps(float(n - k)));
+    const __m128 rx = _mm_add_ps(vrx0, _mm_mul_ps(kern.vsx, _mm_add_ps(_mm_set1_ps(float(k)), lane)));
+    const __m128 r2 = _mm_add_ps(_mm_mul_ps(rx, rx), vryz);
+    const __m128 q = _mm_mul_ps(_mm_sqrt_ps(r2), kern.vinvH);
+    const __m128 t = _mm_sub_ps(one, _mm_mul_ps(half, q));
+    const __m128 t2 = _mm_mul_ps(t, t);
+    const __m128 inside = _mm_and_ps(valid, _mm_cmplt_ps(r2, kern.vcs2));
+    const __m128 w = _mm_and_ps(inside, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(kern.vwn, t2), t2), _mm_add_ps(_mm_mul_ps(two, q), one)));
+    const __m128 old = _mm_loadu_ps(colour + k);
+    if (const int first = _mm_movemask_ps(_mm_and_ps(_mm_cmpgt_ps(w, zero), _mm_cmpeq_ps(old, zero))))
+      for (int l = 0; l < 4; ++l)
+        if (first & (1 << l)) touched.push_back(v0 + std::size_t(k + l));
+    _mm_storeu_ps(colour + k, _mm_add_ps(old, w));
+    return;
+  }
 #endif
   for (; k < n; ++k) {
-    const float rx = rx0 + sx * float(k), r2 = rx * rx + ryz2;
-    if (!(r2 < cs2)) continue;
-    const float q = std::sqrt(r2) * invH, t = 1.0f - 0.5f * q, t2 = t * t;
-    const float w = wn * t2 * t2 * (2.0f * q + 1.0f);
+    const float rx = rx0 + kern.sx * float(k), r2 = rx * rx + ryz2;
+    if (!(r2 < kern.cs2)) continue;
+    const float q = std::sqrt(r2) * kern.invH, t = 1.0f - 0.5f * q, t2 = t * t;
+    const float w = kern.wn * t2 * t2 * (2.0f * q + 1.0f);
     if (colour[k] == 0.0f && w > 0.0f) touched.push_back(v0 + std::size_t(k));
     colour[k] += w;
   }
