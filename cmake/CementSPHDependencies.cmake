@@ -12,7 +12,7 @@ set(CEMENTSPH_VTK_COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel CommonSystem CommonTransforms CommonMisc
   ChartsCore ViewsContext2D RenderingContext2D RenderingContextOpenGL2
   RenderingCore RenderingOpenGL2 RenderingFreeType RenderingAnnotation RenderingVolume
-  InteractionStyle IOImage IOXML IOLegacy
+  InteractionStyle IOImage IOXML IOParallelXML IOLegacy
   FiltersCore FiltersGeneral FiltersGeometry FiltersModeling FiltersSources FiltersExtraction
   ImagingCore ImagingGeneral ImagingMath ImagingStatistics ImagingMorphological
   TestingRendering)

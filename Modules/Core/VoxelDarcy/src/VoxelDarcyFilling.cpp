@@ -533,17 +533,7 @@ Eigen::Vector3d VoxelDarcyFilling::darcyVelocity(std::size_t c) const {
   const auto v = bricks_.ijk(c);
   const VoxelBricks::Cell own = bricks_.find(v[0], v[1], v[2]);
   if (!own.brick) return Eigen::Vector3d::Zero(); // the cement never came near: no flux was written there
-  Eigen::Vector3d q;
-  for (int a = 0; a < 3; ++a) {
-    const double plus = own->faceFlux[a];
-    double minus = 0;
-    if (v[std::size_t(a)] > 0) {
-      const VoxelBricks::Cell below = bricks_.neighbour(own, v, a, -1);
-      if (below.brick) minus = below->faceFlux[a];
-    }
-    q[a] = 0.5 * (plus + minus) / faceArea_[std::size_t(a)];
-  }
-  return q;
+  return darcyVelocityAt(own, v);
 }
 
 VoxelDarcyFilling::VoxelState VoxelDarcyFilling::voxelState(std::size_t c) const {
@@ -559,14 +549,7 @@ VoxelDarcyFilling::VoxelState VoxelDarcyFilling::voxelState(std::size_t c) const
   s.pressure = x.pressure;
   s.viscosity = x.viscosity;
   s.arrival = x.arrival;
-  for (int a = 0; a < 3; ++a) { // as darcyVelocity
-    double minus = 0;
-    if (v[std::size_t(a)] > 0) {
-      const VoxelBricks::Cell below = bricks_.neighbour(own, v, a, -1);
-      if (below.brick) minus = below->faceFlux[a];
-    }
-    s.darcyVelocity[a] = 0.5 * (double(x.faceFlux[a]) + minus) / faceArea_[std::size_t(a)];
-  }
+  s.darcyVelocity = darcyVelocityAt(own, v);
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include <vtkFieldData.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkXMLPPolyDataReader.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
@@ -195,14 +196,49 @@ void writePolyDataUncompressed(vtkPolyData* points, const std::string& path) {
   writeAtomically(path, [&](const std::string& tmp) { raw.write(header, tmp); });
 }
 
+void writePolyDataPieces(const std::string& path, vtkPolyData* prototype, const std::vector<std::string>& pieceFiles) {
+  if (!prototype) throw std::invalid_argument(path + ": no piece to describe");
+  std::ostringstream xml;
+  xml.imbue(std::locale::classic());
+  auto declare = [&](vtkDataArray* a, const char* name, const char* indent) {
+    const char* type = a ? xmlWordType(a) : nullptr;
+    if (!type || !name) throw std::invalid_argument(path + ": a piece's array has no name or no word type");
+    xml << indent << "<PDataArray type=\"" << type << "\" Name=\"" << xmlEscaped(name) << "\" NumberOfComponents=\""
+        << a->GetNumberOfComponents() << "\"/>\n";
+  };
+  const std::uint16_t one = 1; // the pieces' byte order (they are this machine's: writePolyDataUncompressed)
+  const bool little = *reinterpret_cast<const std::uint8_t*>(&one) == 1;
+  xml << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PPolyData\" version=\"1.0\" byte_order=\""
+      << (little ? "LittleEndian" : "BigEndian") << "\" header_type=\"UInt64\">\n"
+      << "  <PPolyData GhostLevel=\"0\">\n";
+  for (const auto& [data, tag] : {std::pair<vtkDataSetAttributes*, const char*>{prototype->GetPointData(), "PPointData"},
+                                  {prototype->GetCellData(), "PCellData"}}) {
+    if (!data || data->GetNumberOfArrays() == 0) continue;
+    xml << "    <" << tag << ">\n";
+    for (int i = 0; i < data->GetNumberOfArrays(); ++i) declare(data->GetArray(i), data->GetArrayName(i), "      ");
+    xml << "    </" << tag << ">\n";
+  }
+  if (prototype->GetPoints()) {
+    xml << "    <PPoints>\n";
+    declare(prototype->GetPoints()->GetData(), "Points", "      ");
+    xml << "    </PPoints>\n";
+  }
+  for (const std::string& piece : pieceFiles) xml << "    <Piece Source=\"" << xmlEscaped(piece.c_str()) << "\"/>\n";
+  xml << "  </PPolyData>\n</VTKFile>\n";
+  writeTextAtomically(path, xml.str());
+}
+
 vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": no such file");
-  auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+  // A .pvtp (writePolyDataPieces) is read whole: every piece it names, appended.
+  vtkSmartPointer<vtkXMLReader> reader;
+  if (std::filesystem::path(path).extension() == ".pvtp") reader = vtkSmartPointer<vtkXMLPPolyDataReader>::New();
+  else reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
   reader->SetFileName(path.c_str());
   reader->Update();
-  if (reader->GetErrorCode() != 0 || !reader->GetOutput())
-    throw std::runtime_error(path + ": cannot read surface");
-  return reader->GetOutput();
+  auto* output = vtkPolyData::SafeDownCast(reader->GetOutputDataObject(0));
+  if (reader->GetErrorCode() != 0 || !output) throw std::runtime_error(path + ": cannot read surface");
+  return output;
 }
 
 } // namespace cementsph::imaging

@@ -14,6 +14,7 @@
 #include <vtkStringArray.h>
 #include <vtkTypeInt32Array.h>
 #include <vtkUnsignedCharArray.h>
+#include <vtkXMLPPolyDataReader.h>
 
 #include <cmath>
 #include <filesystem>
@@ -199,4 +200,57 @@ TEST(PolyDataWriter, AnUnwritablePathThrowsNamingIt) {
   }
   EXPECT_FALSE(fs::exists(path));
   fs::remove_all(scratch("").parent_path()); // the suite's scratch folder (the last test)
+}
+
+// A snapshot as the union of pieces written before (writePolyDataPieces, issue 23): VTK's own parallel reader
+// (vtkXMLPPolyDataReader, not ours) reads the .pvtp as every piece's points and arrays, appended in the order
+// named, value for value; a piece with no points (an interval in which no voxel took cement) adds nothing.
+TEST(PolyDataWriter, VtksParallelReaderReadsThePiecesAsOneDataset) {
+  const vtkIdType sizes[3] = {5, 0, 7};
+  std::vector<vtkSmartPointer<vtkPolyData>> pieces;
+  std::vector<std::string> names;
+  for (int k = 0; k < 3; ++k) {
+    auto piece = sample(sizes[k]);
+    // Shift the points so that each piece's are its own.
+    for (vtkIdType i = 0; i < piece->GetNumberOfPoints(); ++i) {
+      double x[3];
+      piece->GetPoint(i, x);
+      x[0] += 100.0 * k;
+      piece->GetPoints()->SetPoint(i, x);
+    }
+    names.push_back("piece-" + std::to_string(k) + ".vtp");
+    imaging::writePolyDataUncompressed(piece, scratch(names.back()).string());
+    pieces.push_back(piece);
+  }
+  const fs::path union_ = scratch("union.pvtp");
+  imaging::writePolyDataPieces(union_.string(), pieces[0], names);
+  auto reader = vtkSmartPointer<vtkXMLPPolyDataReader>::New();
+  reader->SetFileName(union_.string().c_str());
+  reader->Update();
+  ASSERT_EQ(reader->GetErrorCode(), 0);
+  vtkPolyData* got = reader->GetOutput();
+  ASSERT_EQ(got->GetNumberOfPoints(), 12);
+  EXPECT_EQ(got->GetNumberOfVerts(), 12);
+  vtkIdType at = 0;
+  for (int k = 0; k < 3; ++k)
+    for (vtkIdType i = 0; i < sizes[k]; ++i, ++at) {
+      for (int a = 0; a < 3; ++a) ASSERT_EQ(got->GetPoint(at)[a], pieces[std::size_t(k)]->GetPoint(i)[a]) << k << " " << i;
+      for (const char* name : {"pressure_pa", "cement_volume_mm3", "darcy_velocity_m_per_s"}) {
+        vtkDataArray *want = pieces[std::size_t(k)]->GetPointData()->GetArray(name), *have = got->GetPointData()->GetArray(name);
+        ASSERT_NE(have, nullptr) << name;
+        ASSERT_EQ(have->GetNumberOfComponents(), want->GetNumberOfComponents()) << name;
+        for (int c = 0; c < want->GetNumberOfComponents(); ++c)
+          ASSERT_EQ(have->GetComponent(at, c), want->GetComponent(i, c)) << name << " piece " << k << " point " << i;
+      }
+    }
+  // Ours reads it the same way (by the extension).
+  EXPECT_EQ(imaging::readPolyData(union_.string())->GetNumberOfPoints(), 12);
+  // A prototype array without a name cannot be declared: one clear error, no file.
+  auto unnamed = sample(2);
+  auto extra = vtkSmartPointer<vtkFloatArray>::New();
+  extra->SetNumberOfValues(2);
+  unnamed->GetPointData()->AddArray(extra);
+  const fs::path bad = scratch("bad.pvtp");
+  EXPECT_THROW(imaging::writePolyDataPieces(bad.string(), unnamed, names), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(bad));
 }

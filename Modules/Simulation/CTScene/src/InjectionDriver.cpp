@@ -325,8 +325,12 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
     }
     if (model->time() >= nextSnapshot * (1 - 1e-12) && model->time() < endTime) {
       // The cement first: an engine may give the volume record its snapshot's sum (the voxel engine does).
-      vtkSmartPointer<vtkPolyData> cement = writer.writing() ? model->cement() : nullptr;
+      // As growth where the engine's cement stays where it arrived (the voxel engine), else whole.
+      vtkSmartPointer<vtkPolyData> arrived =
+          writer.writing() && scene.snapshotArrays == "growth" ? model->cementArrivedSinceLastCall() : nullptr;
+      vtkSmartPointer<vtkPolyData> cement = writer.writing() && !arrived ? model->cement() : nullptr;
       s.volumeHistory.push_back(volumeRecord());
+      if (arrived) writer.snapshotPiece(model->time(), std::move(arrived));
       if (cement) writer.snapshot(model->time(), std::move(cement));
       while (nextSnapshot <= model->time() * (1 + 1e-12)) nextSnapshot += scene.snapshotIntervalS;
     }

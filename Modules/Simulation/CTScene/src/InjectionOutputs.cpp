@@ -46,8 +46,8 @@ InjectionWriter::InjectionWriter(std::string outDir, const SceneConfig& scene, d
   if (!writing()) return;
   fs::create_directories(outDir_);
   // An earlier run's temporaries and snapshots must not mix with this run's (AtomicFile.h).
-  imaging::removeStaleOutputs(outDir_, {"particles_####.vtp", "simulated_ct_####.nrrd", "simulated_ct_start.nrrd",
-                                        "sequence.json"});
+  imaging::removeStaleOutputs(outDir_, {"particles_####.vtp", "particles_####.pvtp", "particles_piece_####.vtp",
+                                        "simulated_ct_####.nrrd", "simulated_ct_start.nrrd", "sequence.json"});
   ctSnapshots_ = scene.simulatedCtSnapshots;
   if (ctSnapshots_) ctFrame(0.0, "simulated_ct_start.nrrd", "", nullptr);
 }
@@ -141,12 +141,30 @@ void InjectionWriter::snapshot(double time, vtkSmartPointer<vtkPolyData> particl
   char name[64];
   std::snprintf(name, sizeof name, "particles_%04zu.vtp", snapshots_.size());
   queueParticles(std::move(particles), (fs::path(outDir_) / name).string());
+  addSnapshot(time, name, ctNow);
+}
+
+void InjectionWriter::addSnapshot(double time, const std::string& name, const imaging::ImageType* ctNow) {
   if (ctSnapshots_) {
     char ctName[64];
     std::snprintf(ctName, sizeof ctName, "simulated_ct_%04zu.nrrd", snapshots_.size());
     ctFrame(time, ctName, name, ctNow);
   }
   snapshots_.emplace_back(time, name);
+}
+
+void InjectionWriter::snapshotPiece(double time, vtkSmartPointer<vtkPolyData> arrived, const imaging::ImageType* ctNow) {
+  if (!writing()) return;
+  if (!arrived) throw std::logic_error("inject: a snapshot piece without data");
+  char pieceName[64], name[64];
+  std::snprintf(pieceName, sizeof pieceName, "particles_piece_%04zu.vtp", snapshots_.size());
+  std::snprintf(name, sizeof name, "particles_%04zu.pvtp", snapshots_.size());
+  pieces_.emplace_back(pieceName);
+  // The union names the piece before the second thread has written it: both are this run's files, and the
+  // series (particles.pvd) names the union only once every queued piece is on disk (finish).
+  imaging::writePolyDataPieces(fileOfThisRun(name), arrived, pieces_);
+  queueParticles(std::move(arrived), (fs::path(outDir_) / pieceName).string());
+  addSnapshot(time, name, ctNow);
 }
 
 void InjectionWriter::finish(double time, vtkPolyData* particles, const imaging::ImageType* simulatedCt,

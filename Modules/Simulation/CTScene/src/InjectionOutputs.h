@@ -66,6 +66,10 @@ public:
   // vtkGarbageCollector::Collect, about 1 run in 40 of 5 ml, issue 23). The last one (finish) is written while
   // the caller waits, so that one may stay the caller's.
   void snapshot(double time, vtkSmartPointer<vtkPolyData> particles, const imaging::ImageType* ctNow = nullptr);
+  // A snapshot as growth (InjectionModel::cementArrivedSinceLastCall): `arrived` is written as
+  // particles_piece_NNNN.vtp (on the second thread, as snapshot's) and the snapshot is particles_NNNN.pvtp, the
+  // union of every piece so far. The same ownership rule as snapshot's.
+  void snapshotPiece(double time, vtkSmartPointer<vtkPolyData> arrived, const imaging::ImageType* ctNow = nullptr);
   // The last snapshot (the final state), particles.pvd, tip_pressure.csv, simulated_ct.nrrd, scene.json,
   // sequence.json, the text files (name, content) given, then metrics.json (with the snapshot counts added).
   // simulatedCt: on the region (the last frame of the X-ray series); simulatedCtFile: simulated_ct.nrrd (the
@@ -77,6 +81,8 @@ public:
 
 private:
   void ctFrame(double time, const std::string& ctName, const std::string& particlesName, const imaging::ImageType* now);
+  // The snapshot `name` at time [s] in the series, with its simulated CT frame if the scene asks for them.
+  void addSnapshot(double time, const std::string& name, const imaging::ImageType* ctNow);
   void queueParticles(vtkSmartPointer<vtkPolyData> particles, std::string path);
   void writeQueued();           // the second thread's loop
   void waitForQueuedWrites();   // until every queued snapshot is on disk; rethrows a write's error
@@ -103,6 +109,7 @@ private:
   nlohmann::json ctFrames_ = nlohmann::json::array();
   double ctSnapshotWallS_ = 0.0;
   std::vector<std::pair<double, std::string>> snapshots_;
+  std::vector<std::string> pieces_; // snapshotPiece's files so far
   std::vector<std::string> written_; // this run's files (snapshots, fileOfThisRun), removed if it fails
   bool finished_ = false;
 };

@@ -164,7 +164,7 @@ const std::set<std::string>& sceneKeyNames() {
       "scene_preset", "preset", "particle_radius_mm", "tip_mm", "direction", "cannula_inner_diameter_mm",
       "cannula_length_mm", "cannula_wall", "flow_rate_ml_per_s", "volume_ml", "viscosity_pa_s",
       "viscosity_rate_pa_per_s", "viscosity_table", "threshold_hu", "roi_size_mm", "snapshot_interval_s",
-      "simulated_ct_snapshots", "solid_mass_factor", "drag_coefficient", "sound_speed_m_per_s", "integrator",
+      "snapshot_arrays", "simulated_ct_snapshots", "solid_mass_factor", "drag_coefficient", "sound_speed_m_per_s", "integrator",
       "fixed_particle_sums", "fixed_field_spacing_over_h", "max_displacement_over_h", "neighbour_skin_over_h",
       "pressure_model", "pore_permeability_m2", "capillary_tension_n_per_m", "viscosity_law", "consistency_pa_s_n",
       "flow_index", "zero_shear_viscosity_pa_s", "infinite_shear_viscosity_pa_s", "carreau_time_constant_s",
@@ -222,6 +222,12 @@ void applySceneJson(SceneConfig& s, const json& j) {
     } else if (key == "threshold_hu") s.thresholdHu = number(v, key);
     else if (key == "roi_size_mm") s.roiSizeMm = number(v, key);
     else if (key == "snapshot_interval_s") s.snapshotIntervalS = number(v, key);
+    else if (key == "snapshot_arrays") {
+      s.snapshotArrays = text(v, key);
+      if (s.snapshotArrays != "growth" && s.snapshotArrays != "flow")
+        fail(key, "must be \"growth\" (where the cement is: each voxel written once) or \"flow\" (every snapshot "
+                  "also holds the pressure, volume and velocity of every voxel) (got \"" + shown(s.snapshotArrays) + "\")");
+    }
     else if (key == "simulated_ct_snapshots") {
       if (!v.is_boolean()) fail(key, "must be true or false");
       s.simulatedCtSnapshots = v.get<bool>();
@@ -691,6 +697,7 @@ json toJson(const SceneConfig& s) {
   j["threshold_hu"] = s.thresholdHu;
   j["roi_size_mm"] = s.roiSizeMm;
   j["snapshot_interval_s"] = s.snapshotIntervalS;
+  j["snapshot_arrays"] = s.snapshotArrays;
   j["simulated_ct_snapshots"] = s.simulatedCtSnapshots;
   j["solid_mass_factor"] = s.solidMassFactor;
   if (s.dragCoefficient) j["drag_coefficient"] = *s.dragCoefficient;

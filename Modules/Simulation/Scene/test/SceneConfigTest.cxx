@@ -349,7 +349,7 @@ TEST(SceneConfig, RecordsTheKeysTheUserSet) {
 // sceneKeyNames() is the parser's list: each name is taken as a key (a value of the wrong type is refused naming
 // the key, never as an unknown key), and a name outside it is an unknown key.
 TEST(SceneConfig, TheListOfKeyNamesIsTheParsers) {
-  EXPECT_EQ(sceneKeyNames().size(), 58u); // the parser's branches, counted apart (the key == "..." tests)
+  EXPECT_EQ(sceneKeyNames().size(), 59u); // the parser's branches, counted apart (the key == "..." tests)
   for (const std::string& key : sceneKeyNames()) {
     SceneConfig s;
     try {
@@ -578,5 +578,24 @@ TEST(SceneConfig, AFifoOrFolderGivenAsTheSceneIsRefusedWithoutOpeningIt) {
     } catch (const std::invalid_argument& e) {
       EXPECT_EQ(std::string(e.what()).rfind(path + ": not a regular file", 0), 0u) << e.what();
     }
+  }
+}
+
+// snapshot_arrays: "growth" unless set, "flow" taken, anything else refused naming the key and the two values;
+// the scene as run (toJson) says which.
+TEST(SceneConfig, SnapshotArraysIsGrowthOrFlow) {
+  EXPECT_EQ(SceneConfig{}.snapshotArrays, "growth");
+  SceneConfig s;
+  applySceneJson(s, json{{"snapshot_arrays", "flow"}});
+  EXPECT_EQ(s.snapshotArrays, "flow");
+  EXPECT_EQ(toJson(s)["snapshot_arrays"], "flow");
+  try {
+    applySceneJson(s, json{{"snapshot_arrays", "all"}});
+    ADD_FAILURE() << "\"all\" taken";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("snapshot_arrays"), std::string::npos) << what;
+    EXPECT_NE(what.find("\"growth\""), std::string::npos) << what;
+    EXPECT_NE(what.find("\"flow\""), std::string::npos) << what;
   }
 }

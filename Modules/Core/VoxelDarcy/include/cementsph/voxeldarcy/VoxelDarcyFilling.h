@@ -359,6 +359,21 @@ public:
     Eigen::Vector3d darcyVelocity = Eigen::Vector3d::Zero();
   };
   VoxelState voxelState(std::size_t c) const;
+  // Visits every voxel of wetVoxels(), in order of arrival, as visit(voxel, state) with its voxelState, read
+  // from the brick place the filling keeps for it: no lookup per voxel (the snapshots during a run, issue 23).
+  template <class Visit> void forEachWetVoxel(Visit&& visit) const {
+    VoxelState s;
+    for (std::size_t i = 0; i < wet_.size(); ++i) {
+      const VoxelBricks::Cell& own = wetCell_[i];
+      const VoxelBricks::Voxel& x = *own.operator->();
+      s.fill = x.fill;
+      s.pressure = x.pressure;
+      s.viscosity = x.viscosity;
+      s.arrival = x.arrival;
+      s.darcyVelocity = darcyVelocityAt(own, bricks_.ijk(wet_[i]));
+      visit(wet_[i], s);
+    }
+  }
   // Pore-volume weighted mean pressure of the source voxels (the pressure the cannula works against) [Pa].
   double sourcePressure() const;
   // The last step's inflow into each front voxel that took cement (voxel, m^3/s; a voxel once, in voxel
@@ -392,6 +407,19 @@ private:
   void setBarred(std::size_t c, bool barred) {
     const VoxelBricks::Cell cell = touch(c);
     cell.set(VoxelBricks::kBarredFlag, barred);
+  }
+  // darcyVelocity of the voxel at `v` in `own` (allocated).
+  Eigen::Vector3d darcyVelocityAt(const VoxelBricks::Cell& own, const std::array<int, 3>& v) const {
+    Eigen::Vector3d q;
+    for (int a = 0; a < 3; ++a) {
+      double minus = 0;
+      if (v[std::size_t(a)] > 0) {
+        const VoxelBricks::Cell below = bricks_.neighbour(own, v, a, -1);
+        if (below.brick) minus = below->faceFlux[a];
+      }
+      q[a] = 0.5 * (double(own->faceFlux[a]) + minus) / faceArea_[std::size_t(a)];
+    }
+    return q;
   }
   float faceFlux(std::size_t c, int axis) const {
     const VoxelBricks::Cell cell = bricks_.find(c);

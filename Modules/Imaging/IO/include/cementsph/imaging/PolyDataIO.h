@@ -5,6 +5,7 @@
 #include <vtkSmartPointer.h>
 
 #include <string>
+#include <vector>
 
 namespace cementsph::imaging {
 
@@ -16,6 +17,12 @@ void writePolyData(vtkPolyData* surface, const std::string& path);
 // takes points, the four cell arrays and numeric point, cell and field data in VTK's standard memory layout;
 // anything else (a string array, an implicit array) is written by writePolyData instead.
 void writePolyDataUncompressed(vtkPolyData* points, const std::string& path);
+// A VTK XML parallel PolyData file (.pvtp) whose data is the union of the .vtp pieces named (paths relative to
+// its folder), each of which has the point arrays of `prototype` (names, types, components): how a snapshot that
+// only adds points names the pieces written before it instead of writing them again (issue 23). VTK's
+// vtkXMLPPolyDataReader and ParaView read it as one dataset. Throws std::invalid_argument where an array has no
+// name or no word type (the pieces could not be described).
+void writePolyDataPieces(const std::string& path, vtkPolyData* prototype, const std::vector<std::string>& pieceFiles);
 vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path);
 
 } // namespace cementsph::imaging

@@ -3,10 +3,11 @@
 // (particles_NNNN.vtp) are one per voxel that holds cement (its centre, mm, the CT's frame) with fill_fraction,
 // cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s, porosity, permeability_m2,
 // arrival_time_s, age_s, and as the particles' arrays velocity_m_per_s (the interstitial velocity q / phi) and
-// density_kg_per_m3 (rho0: incompressible), all of them in the last snapshot and the run's result; the snapshots
-// before the last hold the points, cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s and
-// age_s (the rest follows from the last one: cementVoxelsToPolyData), and every snapshot rho0 as the field-data
-// value density_kg_per_m3. Also cement_labels.nrrd: a label map on the simulated CT's grid (1
+// density_kg_per_m3 (rho0: incompressible), all of them in the last snapshot and the run's result. The snapshots
+// before the last (issue 23: a hundred a run) are, with snapshot_arrays "growth" (the default), the union of
+// pieces each holding the voxels that took cement in its interval with arrival_time_s (cementPiece: each voxel
+// written once a run), and with "flow" every voxel's cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s and
+// viscosity (runningCementToPolyData). Also cement_labels.nrrd: a label map on the simulated CT's grid (1
 // cement in bone, 2 leaked cement), which `cementsph inject` draws as cement_slices.png (leaks in red) and 3D
 // Slicer opens as a segmentation.
 //
@@ -251,21 +252,153 @@ struct SnapshotBuffers {
   double volumeM3 = 0;
   double volumeTime = -1;
   std::size_t volumeSteps = 0;
+  void keepVolume(const VoxelDarcyFilling& f, double volumeMm3) {
+    volumeM3 = volumeMm3 * 1e-9;
+    volumeTime = f.time();
+    volumeSteps = f.statistics().steps;
+  }
+  // Snapshots as growth: how much of the filling's wet list (in order of arrival) the pieces so far hold, and
+  // the voxels of it without cement yet when their piece was made (a voxel never empties: each goes in the
+  // first piece made after it takes cement).
+  std::size_t piecesHold = 0;
+  std::vector<std::size_t> wetWithoutCement;
 };
 
-// One point per voxel holding cement. `whole`: every array; else (the snapshots during the run, issue 23) the
-// points, their vertex cells, cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s, viscosity_pa_s and age_s,
-// without the six that the last snapshot holds for every voxel of every earlier one or that the others give:
-// arrival_time_s, permeability_m2 and porosity never change once a voxel has cement, fill_fraction is
-// cement_volume_mm3 / (porosity x the voxel's volume), velocity_m_per_s is darcy_velocity_m_per_s / porosity
-// and density_kg_per_m3 is the rest density (incompressible), which every snapshot holds as a field-data value
-// of that name. Two fifths of the bytes a snapshot's writing compresses.
-vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity,
-                                                    SnapshotBuffers& buffers, bool whole) {
+// One vertex cell per point (point i in cell i), with 32-bit offsets and connectivity: the files say Int32;
+// VTK and ParaView read them as any VTP. ParaView's Threshold and point picking work per cell, so one cell per
+// voxel (not one poly-vertex for all) even though it is 8 of a point's bytes.
+vtkSmartPointer<vtkCellArray> vertexPerPoint(vtkIdType n) {
+  if (n >= vtkIdType(std::numeric_limits<vtkTypeInt32>::max())) throw std::length_error(
+      "cement snapshot: " + std::to_string(n) + " voxels hold cement, over the 2^31 a snapshot's vertices can number");
+  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New(), connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
+  offsets->SetNumberOfValues(n + 1);
+  connectivity->SetNumberOfValues(n);
+  vtkTypeInt32 *offsetOut = offsets->GetPointer(0), *connectivityOut = connectivity->GetPointer(0);
+  for (vtkIdType i = 0; i <= n; ++i) offsetOut[i] = vtkTypeInt32(i);
+  for (vtkIdType i = 0; i < n; ++i) connectivityOut[i] = vtkTypeInt32(i);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->SetData(offsets, connectivity);
+  return verts;
+}
+
+// The points with a vertex cell each (vertexPerPoint).
+vtkSmartPointer<vtkPolyData> vertexCloud(vtkPoints* points) {
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(vertexPerPoint(points->GetNumberOfPoints()));
+  return poly;
+}
+
+template <class Array> vtkSmartPointer<Array> namedArray(const char* name, int components, vtkIdType n) {
+  auto a = vtkSmartPointer<Array>::New();
+  a->SetName(name);
+  a->SetNumberOfComponents(components);
+  a->SetNumberOfTuples(n);
+  return a;
+}
+
+void addFieldValue(vtkPolyData* poly, const char* name, double value) {
+  auto a = vtkSmartPointer<vtkDoubleArray>::New();
+  a->SetName(name);
+  a->InsertNextValue(value);
+  poly->GetFieldData()->AddArray(a);
+}
+
+// The cement during the run (every snapshot but the last; issue 23: a hundred of them a run, so each byte of a
+// point is written a hundred times): one point per voxel holding cement, in order of arrival (the filling's own
+// list: no lookup and no sort per voxel), with its vertex cell and the arrays that change while the cement
+// flows: cement_volume_mm3, pressure_pa and darcy_velocity_m_per_s (single precision: 1e-7 of a value; the
+// snapshot's volume sum is taken in double before rounding), and viscosity_pa_s as a point array where the
+// voxels' viscosities differ (a shear-thinning cement), else one field-data value. The rest follows from the
+// last snapshot, which holds every array for every voxel of every earlier one (find the voxel by its position):
+// arrival_time_s, permeability_m2 and porosity never change once a voxel has cement, age_s is the snapshot's
+// time minus arrival_time_s, fill_fraction is cement_volume_mm3 / (porosity x the voxel's volume),
+// velocity_m_per_s is darcy_velocity_m_per_s / porosity and density_kg_per_m3 the rest density
+// (incompressible), a field-data value in every snapshot. 40 bytes a point against the last one's 96.
+vtkSmartPointer<vtkPolyData> runningCementToPolyData(const VoxelDarcyFilling& f, double restDensity,
+                                                     SnapshotBuffers& buffers) {
   const VoxelMedium& m = f.medium();
-  // The wet voxels, not the whole region (issue 23: a snapshot costs what the cement holds), in index order
-  // as before so that the points come out in the same order.
-  // Each voxel's fields from one brick lookup (voxelState), not one per field: a fifth of a snapshot's cost.
+  const vtkIdType capacity = vtkIdType(f.wetVoxels().size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat(); // mm to 1e-4 of a 40 mm region
+  points->SetNumberOfPoints(capacity);
+  auto volume = namedArray<vtkFloatArray>("cement_volume_mm3", 1, capacity);
+  auto pressure = namedArray<vtkFloatArray>("pressure_pa", 1, capacity);
+  auto velocity = namedArray<vtkFloatArray>("darcy_velocity_m_per_s", 3, capacity);
+  auto viscosity = namedArray<vtkFloatArray>("viscosity_pa_s", 1, capacity);
+  // Through the raw pointers: SetTuple's virtual call per value was a fifth of a snapshot's cost (perf).
+  float *xyz = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0), *volumeOut = volume->GetPointer(0),
+        *pressureOut = pressure->GetPointer(0), *velocityOut = velocity->GetPointer(0),
+        *viscosityOut = viscosity->GetPointer(0);
+  const double mm3PerPoreFill = m.voxelVolume() * 1e9;
+  double volumeMm3 = 0, firstViscosity = 0;
+  bool uniformViscosity = true;
+  vtkIdType n = 0;
+  f.forEachWetVoxel([&](std::size_t c, const VoxelDarcyFilling::VoxelState& s) {
+    if (!(s.fill > 0)) return;
+    const Eigen::Vector3d x = m.centre(c) * 1e3;
+    for (int a = 0; a < 3; ++a) xyz[3 * n + a] = float(x[a]);
+    const double mm3 = s.fill * m.porosity[c] * mm3PerPoreFill;
+    volumeMm3 += mm3;
+    volumeOut[n] = float(mm3);
+    pressureOut[n] = float(s.pressure);
+    for (int a = 0; a < 3; ++a) velocityOut[3 * n + a] = float(s.darcyVelocity[a]);
+    if (n == 0) firstViscosity = s.viscosity;
+    uniformViscosity = uniformViscosity && s.viscosity == firstViscosity;
+    viscosityOut[n] = float(s.viscosity);
+    ++n;
+  });
+  // (shrinking keeps the allocation: no copy)
+  points->SetNumberOfPoints(n);
+  for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{volume, pressure, velocity, viscosity}) a->SetNumberOfTuples(n);
+  buffers.keepVolume(f, volumeMm3);
+  auto poly = vertexCloud(points);
+  for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{volume, pressure, velocity}) poly->GetPointData()->AddArray(a);
+  if (uniformViscosity && n > 0) addFieldValue(poly, "viscosity_pa_s", firstViscosity);
+  else poly->GetPointData()->AddArray(viscosity);
+  addFieldValue(poly, "density_kg_per_m3", restDensity);
+  return poly;
+}
+
+// Snapshots as growth (InjectionModel::cementArrivedSinceLastCall, issue 23): the voxels that took cement
+// since the last piece, in order of arrival, as points with the one array of theirs that never changes,
+// arrival_time_s. 20 bytes a point with its vertex cell, written once a run.
+vtkSmartPointer<vtkPolyData> cementPiece(const VoxelDarcyFilling& f, SnapshotBuffers& buffers) {
+  const VoxelMedium& m = f.medium();
+  const std::vector<std::size_t>& wet = f.wetVoxels();
+  std::vector<std::size_t> newcomers;
+  newcomers.reserve(buffers.wetWithoutCement.size() + (wet.size() - buffers.piecesHold));
+  std::vector<std::size_t> stillWithout;
+  auto take = [&](std::size_t c) { (f.fill()[c] > 0 ? newcomers : stillWithout).push_back(c); };
+  for (std::size_t c : buffers.wetWithoutCement) take(c);
+  for (std::size_t i = buffers.piecesHold; i < wet.size(); ++i) take(wet[i]);
+  buffers.wetWithoutCement.swap(stillWithout);
+  buffers.piecesHold = wet.size();
+  const vtkIdType n = vtkIdType(newcomers.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat();
+  points->SetNumberOfPoints(n);
+  auto arrival = namedArray<vtkFloatArray>("arrival_time_s", 1, n);
+  float *xyz = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0), *arrivalOut = arrival->GetPointer(0);
+  const auto arrivalTime = f.arrivalTime();
+  for (vtkIdType i = 0; i < n; ++i) {
+    const std::size_t c = newcomers[std::size_t(i)];
+    const Eigen::Vector3d x = m.centre(c) * 1e3;
+    for (int a = 0; a < 3; ++a) xyz[3 * i + a] = float(x[a]);
+    arrivalOut[i] = float(arrivalTime[c]);
+  }
+  auto poly = vertexCloud(points);
+  poly->GetPointData()->AddArray(arrival);
+  return poly;
+}
+
+// The cement at the end (the last snapshot and the run's result): one point per voxel holding cement, in
+// voxel index order, with every array.
+vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, double restDensity,
+                                                    SnapshotBuffers& buffers) {
+  const VoxelMedium& m = f.medium();
+  // The wet voxels, not the whole region (issue 23: a snapshot costs what the cement holds), in index order.
+  // Each voxel's fields from one brick lookup (voxelState), not one per field.
   std::vector<std::size_t>& cells = buffers.cells;
   std::vector<VoxelDarcyFilling::VoxelState>& states = buffers.states;
   cells.clear();
@@ -280,83 +413,49 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetDataTypeToFloat(); // mm to 1e-4 of a 40 mm region; half the bytes of doubles
   points->SetNumberOfPoints(n);
-  // Single precision (half the bytes to write a hundred times a run), but the fill and the volumes in double:
-  // they add up to the injected volume. The arrays are filled through their raw pointers: SetTuple's virtual
-  // call per value was a fifth of a snapshot's cost (perf, 5 ml phantom run).
-  auto make = [n](auto array, const char* name, int components) {
-    array->SetName(name);
-    array->SetNumberOfComponents(components);
-    array->SetNumberOfTuples(n);
-    return array;
-  };
-  auto doubles = [&](const char* name) { return make(vtkSmartPointer<vtkDoubleArray>::New(), name, 1); };
-  auto floats = [&](const char* name, int components = 1) {
-    return make(vtkSmartPointer<vtkFloatArray>::New(), name, components);
-  };
-  const vtkIdType nWhole = whole ? n : 0; // the arrays only the whole set holds have no values otherwise
-  auto fill = doubles("fill_fraction"), volume = doubles("cement_volume_mm3");
-  auto pressure = floats("pressure_pa"), velocity = floats("darcy_velocity_m_per_s", 3),
-       viscosity = floats("viscosity_pa_s"), porosity = floats("porosity"), permeability = floats("permeability_m2"),
-       arrival = floats("arrival_time_s"), age = floats("age_s"), speed = floats("velocity_m_per_s", 3),
-       density = floats("density_kg_per_m3");
-  const std::initializer_list<vtkDataArray*> wholeOnly{fill, permeability, arrival, porosity, speed, density};
-  for (vtkDataArray* a : wholeOnly) a->SetNumberOfTuples(nWhole);
+  // Single precision, but the fill and the volumes in double: they add up to the injected volume. Filled
+  // through the raw pointers (SetTuple's virtual call per value was a fifth of a snapshot's cost, perf).
+  auto fill = namedArray<vtkDoubleArray>("fill_fraction", 1, n), volume = namedArray<vtkDoubleArray>("cement_volume_mm3", 1, n);
+  auto pressure = namedArray<vtkFloatArray>("pressure_pa", 1, n),
+       velocity = namedArray<vtkFloatArray>("darcy_velocity_m_per_s", 3, n),
+       viscosity = namedArray<vtkFloatArray>("viscosity_pa_s", 1, n), porosity = namedArray<vtkFloatArray>("porosity", 1, n),
+       permeability = namedArray<vtkFloatArray>("permeability_m2", 1, n),
+       arrival = namedArray<vtkFloatArray>("arrival_time_s", 1, n), age = namedArray<vtkFloatArray>("age_s", 1, n),
+       speed = namedArray<vtkFloatArray>("velocity_m_per_s", 3, n),
+       density = namedArray<vtkFloatArray>("density_kg_per_m3", 1, n);
   float* xyz = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0);
   double *fillOut = fill->GetPointer(0), *volumeOut = volume->GetPointer(0);
   float *pressureOut = pressure->GetPointer(0), *velocityOut = velocity->GetPointer(0),
         *viscosityOut = viscosity->GetPointer(0), *porosityOut = porosity->GetPointer(0),
         *permeabilityOut = permeability->GetPointer(0), *arrivalOut = arrival->GetPointer(0),
         *ageOut = age->GetPointer(0), *speedOut = speed->GetPointer(0), *densityOut = density->GetPointer(0);
-  // One vertex cell per point, with 32-bit offsets and connectivity (the files say Int32; VTK and ParaView
-  // read them as any VTP): 8 of a voxel's 96 raw bytes less to build and compress (the files shrink by less:
-  // LZ4 had squeezed the 64-bit ids' zero bytes).
-  if (n >= vtkIdType(std::numeric_limits<vtkTypeInt32>::max())) throw std::length_error(
-      "cement snapshot: " + std::to_string(n) + " voxels hold cement, over the 2^31 a snapshot's vertices can number");
-  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New(), connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
-  offsets->SetNumberOfValues(n + 1);
-  connectivity->SetNumberOfValues(n);
-  vtkTypeInt32 *offsetOut = offsets->GetPointer(0), *connectivityOut = connectivity->GetPointer(0);
+  double volumeMm3 = 0;
   for (vtkIdType i = 0; i < n; ++i) {
     const std::size_t c = cells[std::size_t(i)];
     const VoxelDarcyFilling::VoxelState& s = states[std::size_t(i)];
     const Eigen::Vector3d x = m.centre(c) * 1e3;
     for (int a = 0; a < 3; ++a) xyz[3 * i + a] = float(x[a]);
     volumeOut[i] = s.fill * m.porosity[c] * m.voxelVolume() * 1e9;
+    volumeMm3 += volumeOut[i];
     pressureOut[i] = float(s.pressure);
     const Eigen::Vector3d& q = s.darcyVelocity;
     for (int a = 0; a < 3; ++a) velocityOut[3 * i + a] = float(q[a]);
     viscosityOut[i] = float(s.viscosity);
     ageOut[i] = float(f.time() - s.arrival);
-    if (whole) {
-      const Eigen::Vector3d v = q / double(m.porosity[c]); // the cement's own (interstitial) velocity
-      for (int a = 0; a < 3; ++a) speedOut[3 * i + a] = float(v[a]);
-      densityOut[i] = float(restDensity);
-      porosityOut[i] = m.porosity[c];
-      fillOut[i] = s.fill;
-      permeabilityOut[i] = float(m.permeability[c]);
-      arrivalOut[i] = float(s.arrival);
-    }
-    offsetOut[i] = vtkTypeInt32(i); // one vertex per cell
-    connectivityOut[i] = vtkTypeInt32(i);
+    const Eigen::Vector3d v = q / double(m.porosity[c]); // the cement's own (interstitial) velocity
+    for (int a = 0; a < 3; ++a) speedOut[3 * i + a] = float(v[a]);
+    densityOut[i] = float(restDensity);
+    porosityOut[i] = m.porosity[c];
+    fillOut[i] = s.fill;
+    permeabilityOut[i] = float(m.permeability[c]);
+    arrivalOut[i] = float(s.arrival);
   }
-  offsetOut[n] = vtkTypeInt32(n);
-  double volumeMm3 = 0;
-  for (vtkIdType i = 0; i < n; ++i) volumeMm3 += volumeOut[i];
-  buffers.volumeM3 = volumeMm3 * 1e-9;
-  buffers.volumeTime = f.time();
-  buffers.volumeSteps = f.statistics().steps;
-  auto verts = vtkSmartPointer<vtkCellArray>::New();
-  verts->SetData(offsets, connectivity);
-  auto poly = vtkSmartPointer<vtkPolyData>::New();
-  poly->SetPoints(points);
-  poly->SetVerts(verts);
+  buffers.keepVolume(f, volumeMm3);
+  auto poly = vertexCloud(points);
   for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{fill, volume, pressure, velocity, viscosity, porosity,
                                                                permeability, arrival, age, speed, density})
-    if (whole || std::find(wholeOnly.begin(), wholeOnly.end(), a) == wholeOnly.end()) poly->GetPointData()->AddArray(a);
-  auto rho0 = vtkSmartPointer<vtkDoubleArray>::New(); // the rest density, for the files without the point array
-  rho0->SetName("density_kg_per_m3");
-  rho0->InsertNextValue(restDensity);
-  poly->GetFieldData()->AddArray(rho0);
+    poly->GetPointData()->AddArray(a);
+  addFieldValue(poly, "density_kg_per_m3", restDensity); // as in the snapshots before, which have no point array
   return poly;
 }
 
@@ -512,8 +611,10 @@ public:
 
   // The snapshots during the run hold the reduced set, the last one (after finish) and the result every array.
   vtkSmartPointer<vtkPolyData> cement() const override {
-    return cementVoxelsToPolyData(*filling_, rho0_, snapshots_, finished_);
+    return finished_ ? cementVoxelsToPolyData(*filling_, rho0_, snapshots_)
+                     : runningCementToPolyData(*filling_, rho0_, snapshots_);
   }
+  vtkSmartPointer<vtkPolyData> cementArrivedSinceLastCall() override { return cementPiece(*filling_, snapshots_); }
   void finish(bool) override { finished_ = true; }
 
   void report(InjectionSummary& s, json& e) const override {
@@ -953,7 +1054,7 @@ InjectionModelRegistry::SceneKeys voxelDarcySceneKeys() {
           "mixing_to_injection_s", "curing_table", "cement", "curing_model", "curing_time_s", "cured_viscosity_pa_s",
           "curing_reference_time_s", "marrow_hu", "bone_tissue_hu", "kozeny_carman_diameter_mm",
           "soft_tissue_max_hu", "soft_tissue_permeability_m2", "stop_at_first_leak", "allow_tip_outside_bone",
-          "labels_path", "label_table", "second_tip_withdrawal_mm", "second_tip_volume_ml"};
+          "labels_path", "label_table", "second_tip_withdrawal_mm", "second_tip_volume_ml", "snapshot_arrays"};
 }
 
 } // namespace cementsph::scene

@@ -19,6 +19,10 @@
 //   threshold_hu                    solid where HU > threshold                              paper 0
 //   roi_size_mm                     edge of the cube about the tip that is modelled         paper 40
 //   snapshot_interval_s                                                                     1
+//   snapshot_arrays "growth"|"flow" voxel-darcy: what the snapshots before the last hold: "growth" the cement
+//                                   then (particles_NNNN.pvtp of pieces, each voxel written once, with its
+//                                   arrival time); "flow" also its volume, pressure and Darcy velocity (every
+//                                   voxel every snapshot: a .vtp each; docs/scene-figures.md)     growth
 //   simulated_ct_snapshots (bool)   also write simulated_ct_NNNN.nrrd at every particle snapshot false
 //                                   (same numbering as particles_NNNN.vtp), simulated_ct_start.nrrd
 //                                   at t = 0 (no cement: the background of X-ray sequences, paper
@@ -123,6 +127,7 @@ struct SceneConfig {
   double thresholdHu = 0.0;
   double roiSizeMm = 40.0;
   double snapshotIntervalS = 1.0;
+  std::string snapshotArrays = "growth"; // "growth" or "flow" (voxel-darcy)
   bool simulatedCtSnapshots = false;
   double solidMassFactor = 8.0;
   std::optional<double> dragCoefficient;
