@@ -1221,12 +1221,25 @@ private:
     int iterations = 0;
     double residual = 0;
   };
+  // The pairs come sorted by i (geometry() lists them so, hidePairsBehindSolid keeps the order) with j > i, so y_i
+  // is held in a register over its run of pairs: no pair of the run writes it, and its subtractions come in the
+  // same order as one pair at a time (the same bits), without a store and reload per pair.
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
     y = Eigen::Map<const Eigen::VectorXd>(diagA_.data(), x.size()).cwiseProduct(x);
-    for (std::size_t q = 0; q < pairA_.size(); ++q) {
-      const Eigen::Index i = pairI_[q], j = pairJ_[q];
-      y[i] -= pairA_[q] * x[j];
-      y[j] -= pairA_[q] * x[i];
+    const double* xd = x.data();
+    double* yd = y.data();
+    const std::size_t m = pairA_.size();
+    for (std::size_t q = 0; q < m;) {
+      const int i = pairI_[q];
+      const double xi = xd[i];
+      double yi = yd[i];
+      for (; q < m && pairI_[q] == i; ++q) {
+        const double a = pairA_[q];
+        const int j = pairJ_[q];
+        yi -= a * xd[j];
+        yd[j] -= a * xi;
+      }
+      yd[i] = yi;
     }
   }
   Cg conjugateGradient(const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int maxIterations) const {

@@ -121,9 +121,12 @@ void fieldCell(const Eigen::Vector3d& p, const Eigen::Vector3d& origin, const Ei
 // particle): one that is not finite throws sph::SimulationError naming where() and what, rather than entering the
 // pressure matrix.
 template <class Where>
-void requireFiniteSum(double value, const char* what, const Where& where) {
-  if (!std::isfinite(value))
-    throw sph::SimulationError(where() + ": its " + what + " is not finite (" + std::to_string(value) + "): the run went unstable");
+[[noreturn]] void throwNotFinite(double value, const char* what, const Where& where) {
+  throw sph::SimulationError(where() + ": its " + what + " is not finite (" + std::to_string(value) + "): the run went unstable");
+}
+template <class Where>
+inline void requireFiniteSum(double value, const char* what, const Where& where) {
+  if (__builtin_expect(!std::isfinite(value), 0)) throwNotFinite(value, what, where);
 }
 
 // The kernel of the colour pass (colourRun) in single precision: the voxels' x spacing sx, invH = 1 / h,
