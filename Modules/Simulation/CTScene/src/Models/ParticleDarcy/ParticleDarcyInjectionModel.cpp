@@ -271,6 +271,7 @@ public:
           run[v] = std::uint8_t(i + 1 < g.size[0] && run[v + 1] ? std::min(run[v + 1] + 1, 255) : 1);
         }
       }
+    inverseSpacingX_ = 1.0 / g.spacing[0];
     padClosed();
     markSightChecks();
     indexSightOffsets();
@@ -546,11 +547,13 @@ private:
     const int k = int(v / (std::size_t(g.size[0]) * std::size_t(g.size[1])));
     const std::uint8_t* centre = closedPad_.data() + paddedIndex(i, j, k);
     double c = 0;
-    double part[4] = {0, 0, 0, 0}; // four sums: no branch (closed is 0 or 1), no chain of dependent additions
-    std::size_t q = 0;
-    for (; q + 4 <= stencil_.size(); q += 4)
-      for (int l = 0; l < 4; ++l) part[l] += stencil_[q + std::size_t(l)].weight * double(centre[stencil_[q + std::size_t(l)].offset]);
-    for (; q < stencil_.size(); ++q) part[0] += stencil_[q].weight * double(centre[stencil_[q].offset]);
+    // Four sums (entry q into sum q % 4, the last size % 4 entries into the first), no chain of dependent additions.
+    // Only the closed voxels add: an open one would add weight x 0 = +0, which changes no sum (none is ever -0), so
+    // skipping it gives the same bits; in pore space most of the support is open.
+    double part[4] = {0, 0, 0, 0};
+    const std::size_t whole = stencil_.size() - stencil_.size() % 4;
+    for (std::size_t q = 0; q < stencil_.size(); ++q)
+      if (centre[stencilOffsets_[q]]) part[q < whole ? q & 3 : 0] += stencil_[q].weight;
     c = (part[0] + part[1]) + (part[2] + part[3]);
     // Stored as a float and returned as stored: the first call's answer is every later call's (it used to
     // return the unrounded sum once, so a voxel's share depended on whether it had been asked before).
@@ -579,12 +582,16 @@ private:
     float* node = block.get() + std::size_t(kFieldValues) * std::size_t((I & 7) + 8 * ((J & 7) + 8 * (K & 7)));
     if (!std::isnan(node[0])) return node;
     const std::uint8_t* centre = closedPad_.data() + paddedIndex(i, j, k);
+    // Only the closed voxels add (closed is 0 or 1: an open one would add +-0, which changes no sum, none being -0
+    // ever, so skipping it gives the same bits); the offsets are read apart from the entries (stencilOffsets_: the
+    // same offsets in the same order), so an open voxel costs a byte read, not an entry's 15 values.
     double s[kFieldValues] = {};
-    for (const FieldEntry& e : fieldStencil_) { // no branch: closed is 0 or 1
-      const double c = double(centre[e.offset]);
-      s[0] += c * e.w, s[1] += c * e.fr[0], s[2] += c * e.fr[1], s[3] += c * e.fr[2], s[4] += c * e.fr2;
-      s[5] += c * e.dm[0], s[6] += c * e.dm[1], s[7] += c * e.dm[2];
-      for (int a = 0; a < 6; ++a) s[8 + a] += c * e.dg[a];
+    for (std::size_t q = 0; q < fieldStencil_.size(); ++q) {
+      if (!centre[stencilOffsets_[q]]) continue;
+      const FieldEntry& e = fieldStencil_[q];
+      s[0] += e.w, s[1] += e.fr[0], s[2] += e.fr[1], s[3] += e.fr[2], s[4] += e.fr2;
+      s[5] += e.dm[0], s[6] += e.dm[1], s[7] += e.dm[2];
+      for (int a = 0; a < 6; ++a) s[8 + a] += e.dg[a];
     }
     for (int a = 0; a < kFieldValues; ++a) node[a] = float(s[a]);
     return node;
@@ -688,7 +695,7 @@ private:
     const sph::VoxelGrid& g = solid_->grid;
     const double rest = kernel_.support * kernel_.support - (ry2 + rz2);
     if (!(rest > 0)) return false;
-    const double half = std::sqrt(rest), inverse = 1.0 / g.spacing[0];
+    const double half = std::sqrt(rest), inverse = inverseSpacingX_; // 1 / spacing, made once (start)
     // Truncation for floor and ceil: it widens the range by at most a voxel (a superset: lo clips it), no rounding call.
     i0 = std::max(lo, int((px - half - g.origin[0]) * inverse) - 1);
     i1 = std::min(hi, int((px + half - g.origin[0]) * inverse) + 1);
@@ -756,6 +763,14 @@ private:
           for (int o = 0; o < 6; ++o) e.dg[o] = vc * (radial * r[ab[o][0]] * r[ab[o][1]] + (ab[o][0] == ab[o][1] ? diagonal : 0.0));
           fieldStencil_.push_back(e);
         }
+    // The two stencils hold the same offsets in the same order (the same loops and test): read apart by the sums.
+    stencilOffsets_.clear();
+    for (const StencilEntry& e : stencil_) stencilOffsets_.push_back(e.offset);
+    if (stencilOffsets_.size() != fieldStencil_.size())
+      throw std::logic_error("particle-darcy: the closed colour's and the closed sums' stencils differ");
+    for (std::size_t q = 0; q < stencilOffsets_.size(); ++q)
+      if (stencilOffsets_[q] != fieldStencil_[q].offset)
+        throw std::logic_error("particle-darcy: the closed colour's and the closed sums' stencils differ");
     for (int a = 0; a < 3; ++a) fieldBlocks_[a] = (padSize_[a] + 7) / 8;
     closedField_.clear();
     closedField_.resize(std::size_t(fieldBlocks_[0]) * std::size_t(fieldBlocks_[1]) * std::size_t(fieldBlocks_[2]));
@@ -872,20 +887,25 @@ private:
     sightSlot_.assign(g.count(), -1);
     sightBits_.clear();
   }
-  bool ghostHidden(std::size_t home, const int h[3], int i, int j, int k) const {
+  // table: the home voxel's (sightBits_[sightSlot_[home]]); sightRow: where sightIndex_ numbers the offset of voxel
+  // (0, j, k) from home h (sightRowOf; voxel (i, j, k)'s at sightRow + i): the per-particle and per-row parts of the
+  // lookup are made once, not per voxel.
+  bool ghostHidden(std::atomic<std::uint8_t>* table, std::ptrdiff_t sightRow, const int h[3], int i, int j, int k) const {
     const sph::VoxelGrid& g = solid_->grid;
-    const int side = 2 * sightM_ + 1;
-    const int e = sightIndex_[std::size_t(i - h[0] + sightM_) +
-                              std::size_t(side) * (std::size_t(j - h[1] + sightM_) + std::size_t(side) * std::size_t(k - h[2] + sightM_))];
+    const int e = sightIndex_[std::size_t(sightRow + i)];
     const auto from = [&] { return Eigen::Vector3d(g.centre(h[0], h[1], h[2]) + Eigen::Vector3d(0.011, 0.023, 0.037).cwiseProduct(g.spacing)); };
     if (e < 0) return lineOfSightBlocked(from(), g.centre(i, j, k)); // an offset the table lacks (a rounding guard)
-    std::atomic<std::uint8_t>& byte = sightBits_[std::size_t(sightSlot_[home])][std::size_t(e) / 4];
+    std::atomic<std::uint8_t>& byte = table[std::size_t(e) / 4];
     const int shift = 2 * (e % 4);
     const std::uint8_t known = std::uint8_t((byte.load(std::memory_order_relaxed) >> shift) & 3);
     if (known) return known == 2;
     const bool hidden = lineOfSightBlocked(from(), g.centre(i, j, k));
     byte.fetch_or(std::uint8_t((hidden ? 2 : 1) << shift), std::memory_order_relaxed);
     return hidden;
+  }
+  std::ptrdiff_t sightRowOf(const int h[3], int j, int k) const {
+    const std::ptrdiff_t side = 2 * sightM_ + 1;
+    return std::ptrdiff_t(sightM_ - h[0]) + side * (std::ptrdiff_t(j - h[1] + sightM_) + side * std::ptrdiff_t(k - h[2] + sightM_));
   }
 
   // Moves the pairs whose segment crosses a closed voxel out of the flux's pair list (pairI_ ...) into
@@ -1064,6 +1084,8 @@ private:
       const bool tabled = checkSight && sightSlot_[std::size_t(home)] >= 0;
       int h[3] = {0, 0, 0};
       if (checkSight) voxelIndex(std::size_t(home), h);
+      std::atomic<std::uint8_t>* const table = tabled ? sightBits_[std::size_t(sightSlot_[std::size_t(home)])].get() : nullptr;
+      const int runLo = cementLo_[0]; // read once (the loop's stores could alias the member, so the compiler rereads it)
       for (int k = lo[2]; k <= hi[2]; ++k) {
         const double rz = (g.origin[2] + g.spacing[2] * k) - p[2], rz2 = rz * rz;
         for (int j = lo[1]; j <= hi[1]; ++j) {
@@ -1071,13 +1093,14 @@ private:
           int i0, i1;
           if (!rowRange(p[0], ry2, rz2, lo[0], hi[0], i0, i1)) continue;
           const std::size_t row = g.index(0, j, k);
+          const std::ptrdiff_t sightRow = tabled ? sightRowOf(h, j, k) : 0;
           // Closed voxels and cement are skipped, a run of them at once (markCementRuns): only the open space about
           // the cement is visited. The region lies in the runs' box.
           const std::uint8_t* runRow =
               cementRun_.data() + std::size_t(cementDim_[0]) * (std::size_t(j - cementLo_[1]) +
                                                                 std::size_t(cementDim_[1]) * std::size_t(k - cementLo_[2]));
           for (int ii = i0; ii <= i1; ++ii) {
-            if (const std::uint8_t skip = runRow[ii - cementLo_[0]]) {
+            if (const std::uint8_t skip = runRow[ii - runLo]) {
               ii += skip - 1;
               continue;
             }
@@ -1091,7 +1114,7 @@ private:
             num += vcOverV * kernel_.w(rn);
             // An empty pore behind solid is space (it counts in the number density) but no ghost: no
             // pressure coupling crosses a closed voxel (lineOfSightBlocked).
-            if (checkSight && (tabled ? ghostHidden(std::size_t(home), h, ii, j, k) : lineOfSightBlocked(p, r + p))) {
+            if (checkSight && (tabled ? ghostHidden(table, sightRow, h, ii, j, k) : lineOfSightBlocked(p, r + p))) {
               missing += vc * f * r2;
               continue;
             }
@@ -1551,12 +1574,14 @@ private:
   // or open occupied voxel the steps along +x to the next voxel that is neither (at most 255), 0 elsewhere.
   std::vector<std::uint8_t> cementRun_;
   int cementLo_[3] = {0, 0, 0}, cementDim_[3] = {0, 0, 0};
+  double inverseSpacingX_ = 1; // 1 / the voxels' x spacing (rowRange)
   // The ghosts' sight tables (ghostHidden): offset numbering, per region voxel its table's slot (-1: none yet).
   int sightM_ = 0, sightEntries_ = 0;
   std::vector<int> sightIndex_;
   std::vector<std::int32_t> sightSlot_;
   std::vector<std::unique_ptr<std::atomic<std::uint8_t>[]>> sightBits_;
   std::vector<StencilEntry> stencil_;
+  std::vector<std::ptrdiff_t> stencilOffsets_; // stencil_'s (and fieldStencil_'s) offsets alone
   int pad_ = 0, padSize_[3] = {1, 1, 1};
   std::vector<std::size_t> touched_, previousTouched_; // the voxels with colour (and the outlet ball's), this step and the last
   std::size_t shaftVoxels_ = 0, steps_ = 0, subSteps_ = 0, frontParticles_ = 0, subStepsClamped_ = 0, cappedSubStepMoves_ = 0;
