@@ -625,3 +625,22 @@ TEST(ParticleDarcyStepping, ANonFinitePositionOrSumStopsTheRunSayingWhere) {
     EXPECT_NE(std::string(e.what()).find("particle 7 at step 12: its number density is not finite"), std::string::npos) << e.what();
   }
 }
+
+// A pressure solve whose solution is not finite stops the run with sph::SimulationError naming the solve and the
+// particle (particle_darcy::requireFiniteSolution, after solvePressure's two solves); before, a NaN solve counted as
+// converged (its residual compares false) and the particles stood still (a NaN step is refused as a closed voxel's).
+TEST(ParticleDarcyStepping, ANonFiniteSolveStopsTheRunNamingTheParticle) {
+  using cementsph::scene::particle_darcy::requireFiniteSolution;
+  const auto where = [] { return std::string("step 40, the pressure solve"); };
+  Eigen::VectorXd x(4);
+  x << 1.0, -2.0, 0.5, 4.0;
+  EXPECT_NO_THROW(requireFiniteSolution(x, "Darcy pressure", where));
+  x[2] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    requireFiniteSolution(x, "Darcy pressure", where);
+    ADD_FAILURE() << "no error for a solution that is not finite";
+  } catch (const cementsph::sph::SimulationError& e) {
+    EXPECT_NE(std::string(e.what()).find("step 40, the pressure solve: the Darcy pressure of particle 2 is not finite"), std::string::npos)
+        << e.what();
+  }
+}

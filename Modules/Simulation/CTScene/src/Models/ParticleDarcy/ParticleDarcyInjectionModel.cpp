@@ -1235,6 +1235,13 @@ private:
     correctionIterations_ += std::size_t(rc.iterations);
     worstResidual_ = std::max(worstResidual_, r.residual);
     if (r.residual > 1e-9) ++unconverged_;
+    const auto where = [&] {
+      return "particle-darcy: step " + std::to_string(steps_) + " (t = " + std::to_string(time_) + " s, " + std::to_string(n) +
+             " particles), the pressure solve (" + std::to_string(r.iterations) + " + " + std::to_string(rc.iterations) +
+             " CG iterations, residuals " + std::to_string(r.residual) + ", " + std::to_string(rc.residual) + ")";
+    };
+    particle_darcy::requireFiniteSolution(x, "Darcy pressure", where);
+    particle_darcy::requireFiniteSolution(xc, "density correction", where);
     for (std::size_t i = 0; i < n; ++i) p_[i] = x[Eigen::Index(i)], pc_[i] = xc[Eigen::Index(i)];
   }
 

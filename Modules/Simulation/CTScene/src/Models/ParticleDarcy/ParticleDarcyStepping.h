@@ -129,6 +129,19 @@ inline void requireFiniteSum(double value, const char* what, const Where& where)
   if (__builtin_expect(!std::isfinite(value), 0)) throwNotFinite(value, what, where);
 }
 
+// A solve's solution the run goes on with (the pressure solve's p and its density correction pc, one entry per
+// particle): the first entry that is not finite throws sph::SimulationError naming where() (the step, the time, the
+// solve's figures), what and the particle. Without it a NaN solve went on silently: its residual compares false
+// against the tolerance (not counted as unconverged, nor as the worst residual), and a NaN step is refused as a
+// closed voxel's would be (particle_darcy::stepAround), so the particles stood still.
+template <class Where>
+void requireFiniteSolution(const Eigen::VectorXd& x, const char* what, const Where& where) {
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    if (!std::isfinite(x[i]))
+      throw sph::SimulationError(where() + ": the " + what + " of particle " + std::to_string(i) + " is not finite (" +
+                                 std::to_string(x[i]) + "): the run went unstable");
+}
+
 // The kernel of the colour pass (colourRun) in single precision: the voxels' x spacing sx, invH = 1 / h,
 // wn = d^3 x W's norm, cs2 = (2h)^2, and their SSE2 broadcasts, made once per pass.
 struct ColourKernel {
