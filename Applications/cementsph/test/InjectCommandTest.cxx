@@ -46,10 +46,11 @@ TEST(InjectCommand, RunsAndWritesTheResults) {
   EXPECT_NE(r.output.find("injected"), std::string::npos) << r.output;
   for (const char* f : {"metrics.json", "tip_pressure.csv", "particles.pvd", "simulated_ct.nrrd", "scene.json"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
-  // The first snapshot: the cement then, whole (particles) or as growth (voxel-darcy's default, a .pvtp).
-  EXPECT_TRUE(fs::exists(dir / "out" / "particles_0000.vtp") || fs::exists(dir / "out" / "particles_0000.pvtp"));
   std::ifstream in(dir / "out" / "metrics.json");
   const nlohmann::json m = nlohmann::json::parse(in);
+  // The first snapshot: as growth with voxel-darcy (its default snapshot_arrays, a .pvtp), else whole.
+  const bool growth = m["pressure_model"] == "voxel-darcy";
+  EXPECT_TRUE(fs::exists(dir / "out" / (growth ? "particles_0000.pvtp" : "particles_0000.vtp"))) << m["pressure_model"];
   const double d3 = std::pow(1.14e-3, 3) * 1e6;
   EXPECT_GT(m["volume_injected_ml"].get<double>(), 0.1 - d3); // the override won over the file's 5 ml
   EXPECT_LE(m["volume_injected_ml"].get<double>(), 0.1);

@@ -2,6 +2,7 @@
 
 #include "cementsph/imaging/AtomicFile.h"
 
+#include <vtkCallbackCommand.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -234,9 +235,27 @@ vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path) {
   vtkSmartPointer<vtkXMLReader> reader;
   if (std::filesystem::path(path).extension() == ".pvtp") reader = vtkSmartPointer<vtkXMLPPolyDataReader>::New();
   else reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+  // VTK's readers report some failures only as an error event (a .pvtp's piece that cannot be read leaves the
+  // error code 0 and the output empty): caught here, so that it is this function's one error, not a line of
+  // VTK's on stderr and fewer points.
+  std::string error;
+  auto onError = vtkSmartPointer<vtkCallbackCommand>::New();
+  onError->SetClientData(&error);
+  onError->SetCallback([](vtkObject*, unsigned long, void* clientData, void* callData) {
+    auto& first = *static_cast<std::string*>(clientData);
+    if (first.empty()) first = callData ? static_cast<const char*>(callData) : "error";
+  });
+  reader->AddObserver(vtkCommand::ErrorEvent, onError);
   reader->SetFileName(path.c_str());
   reader->Update();
   auto* output = vtkPolyData::SafeDownCast(reader->GetOutputDataObject(0));
+  if (!error.empty()) {
+    // VTK's text ends in a newline and may name the reader's address: the first line, the rest of it.
+    std::string line = error.substr(0, error.find('\n'));
+    const auto colon = line.find("): ");
+    if (colon != std::string::npos) line = line.substr(colon + 3);
+    throw std::runtime_error(path + ": cannot read (" + line + ")");
+  }
   if (reader->GetErrorCode() != 0 || !output) throw std::runtime_error(path + ": cannot read surface");
   return output;
 }

@@ -4,6 +4,8 @@
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 
+#include <vtkAppendPolyData.h>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -47,6 +49,7 @@ InjectionWriter::InjectionWriter(std::string outDir, const SceneConfig& scene, d
   fs::create_directories(outDir_);
   // An earlier run's temporaries and snapshots must not mix with this run's (AtomicFile.h).
   imaging::removeStaleOutputs(outDir_, {"particles_####.vtp", "particles_####.pvtp", "particles_piece_####.vtp",
+                                        "particles_piece_####-####.vtp",
                                         "simulated_ct_####.nrrd", "simulated_ct_start.nrrd", "sequence.json"});
   ctSnapshots_ = scene.simulatedCtSnapshots;
   if (ctSnapshots_) ctFrame(0.0, "simulated_ct_start.nrrd", "", nullptr);
@@ -63,6 +66,7 @@ InjectionWriter::~InjectionWriter() {
 
 std::string InjectionWriter::fileOfThisRun(const std::string& name) {
   std::string path = (fs::path(outDir_) / name).string();
+  std::lock_guard<std::mutex> lock(queueMutex_); // (the second thread adds the pieces it merges)
   written_.push_back(path);
   return path;
 }
@@ -74,7 +78,10 @@ void InjectionWriter::ctFrame(double time, const std::string& ctName, const std:
   if (!now) made = simulatedCt_();
   const imaging::ImageType& frame = now ? *now : *made;
   imaging::writeVolume(&frame, (fs::path(outDir_) / ctName).string());
-  written_.push_back((fs::path(outDir_) / ctName).string());
+  {
+    std::lock_guard<std::mutex> lock(queueMutex_);
+    written_.push_back((fs::path(outDir_) / ctName).string());
+  }
   ctSnapshotWallS_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ctFrames_.push_back({{"index", ctFrames_.size()}, {"time_s", time}, {"simulated_ct", ctName},
                        {"particles", particlesName.empty() ? json(nullptr) : json(particlesName)}});
@@ -82,7 +89,7 @@ void InjectionWriter::ctFrame(double time, const std::string& ctName, const std:
   if (onCtFrame_) onCtFrame_(time, frame);
 }
 
-void InjectionWriter::queueParticles(vtkSmartPointer<vtkPolyData> particles, std::string path) {
+void InjectionWriter::queueParticles(vtkSmartPointer<vtkPolyData> particles, std::string path, std::string union_) {
   if (!particles) throw std::runtime_error(path + ": nothing to write");
   std::unique_lock<std::mutex> lock(queueMutex_);
   if (writeError_) std::rethrow_exception(writeError_);
@@ -90,7 +97,8 @@ void InjectionWriter::queueParticles(vtkSmartPointer<vtkPolyData> particles, std
   queueChanged_.wait(lock, [this] { return queue_.size() < kQueuedSnapshots || writeError_; });
   if (writeError_) std::rethrow_exception(writeError_);
   written_.push_back(path); // removed by the destructor if the run fails, written or not
-  queue_.push_back({std::move(particles), std::move(path)});
+  if (!union_.empty()) written_.push_back(union_);
+  queue_.push_back({std::move(particles), std::move(path), std::move(union_)});
   queueChanged_.notify_all();
 }
 
@@ -107,7 +115,8 @@ void InjectionWriter::writeQueued() {
     try {
       // Raw and uncompressed (PolyDataIO.h): VTK's writer with LZ4 cost ~3x the file system's own time per
       // byte to save a tenth of the bytes of single-precision fields (issue 23).
-      imaging::writePolyDataUncompressed(job.data, job.path);
+      if (job.union_.empty()) imaging::writePolyDataUncompressed(job.data, job.path);
+      else writePiece(std::move(job.data), job.path, job.union_);
     } catch (...) {
       error = std::current_exception();
     }
@@ -118,6 +127,42 @@ void InjectionWriter::writeQueued() {
     if (writeError_) queue_.clear();
     queueChanged_.notify_all();
   }
+}
+
+void InjectionWriter::writePiece(vtkSmartPointer<vtkPolyData> piece, const std::string& path, const std::string& union_) {
+  imaging::writePolyDataUncompressed(piece, path);
+  const std::size_t index = pieces_.empty() ? 0 : pieces_.back().first + pieces_.back().snapshots;
+  pieces_.push_back({std::move(piece), fs::path(path).filename().string(), index, 1});
+  // The carries: the kMergedPieces newest pieces, of equal runs of snapshots, become one (vtkAppendPolyData:
+  // points, cells and point arrays in order, the oldest first).
+  auto carry = [this] {
+    if (pieces_.size() < kMergedPieces) return false;
+    for (std::size_t i = pieces_.size() - kMergedPieces; i + 1 < pieces_.size(); ++i)
+      if (pieces_[i].snapshots != pieces_.back().snapshots) return false;
+    return true;
+  };
+  while (carry()) {
+    const std::size_t from = pieces_.size() - kMergedPieces;
+    auto append = vtkSmartPointer<vtkAppendPolyData>::New();
+    for (std::size_t i = from; i < pieces_.size(); ++i) append->AddInputData(pieces_[i].data);
+    append->Update();
+    Piece& merged = pieces_[from];
+    merged.data = append->GetOutput();
+    merged.snapshots *= kMergedPieces;
+    pieces_.resize(from + 1);
+    char name[64];
+    std::snprintf(name, sizeof name, "particles_piece_%04zu-%04zu.vtp", merged.first, merged.first + merged.snapshots - 1);
+    merged.name = name;
+    const std::string mergedPath = (fs::path(outDir_) / name).string();
+    {
+      std::lock_guard<std::mutex> lock(queueMutex_);
+      written_.push_back(mergedPath); // (the destructor reads it after this thread has ended)
+    }
+    imaging::writePolyDataUncompressed(merged.data, mergedPath);
+  }
+  std::vector<std::string> names;
+  for (const Piece& p : pieces_) names.push_back(p.name);
+  imaging::writePolyDataPieces(union_, pieces_.back().data, names);
 }
 
 void InjectionWriter::waitForQueuedWrites() {
@@ -159,11 +204,9 @@ void InjectionWriter::snapshotPiece(double time, vtkSmartPointer<vtkPolyData> ar
   char pieceName[64], name[64];
   std::snprintf(pieceName, sizeof pieceName, "particles_piece_%04zu.vtp", snapshots_.size());
   std::snprintf(name, sizeof name, "particles_%04zu.pvtp", snapshots_.size());
-  pieces_.emplace_back(pieceName);
-  // The union names the piece before the second thread has written it: both are this run's files, and the
-  // series (particles.pvd) names the union only once every queued piece is on disk (finish).
-  imaging::writePolyDataPieces(fileOfThisRun(name), arrived, pieces_);
-  queueParticles(std::move(arrived), (fs::path(outDir_) / pieceName).string());
+  // Both written on the second thread (writePiece); the series (particles.pvd) names the union only once
+  // every queued one is on disk (finish).
+  queueParticles(std::move(arrived), (fs::path(outDir_) / pieceName).string(), (fs::path(outDir_) / name).string());
   addSnapshot(time, name, ctNow);
 }
 

@@ -284,15 +284,19 @@ TEST(VoxelDarcyInjection, TheEarlierSnapshotsLeaveOutOnlyWhatTheLastOneAndTheirO
   }
 }
 
-TEST(VoxelDarcyInjection, GrowthSnapshotsAreTheCementThatHadArrivedEachVoxelWrittenOnce) {
+TEST(VoxelDarcyInjection, GrowthSnapshotsAreTheCementThatHadArrived) {
   // snapshot_arrays "growth" (the default): 0.3 ml in 6 s, a snapshot every 0.5 s. Each snapshot before the
-  // last is particles_NNNN.pvtp, the union of the pieces written so far (particles_piece_NNNN.vtp, each the
-  // voxels that took cement in its interval, with arrival_time_s), read with VTK's parallel reader. Against the
-  // last snapshot (every voxel with cement, every array, made by the other path, cementVoxelsToPolyData):
-  // a snapshot at t holds exactly the voxels whose arrival_time_s is at most t, each once, with the same
-  // arrival time (float) -- the cement at t; the pieces are disjoint, so each voxel is written once a run.
+  // last is particles_NNNN.pvtp, the union of pieces, read here with VTK's parallel reader. Oracles:
+  //  * the same scene with "flow", whose .vtp snapshots come from the other path (every voxel's state,
+  //    runningCementToPolyData): the growth snapshot at t holds exactly that snapshot's voxels, each once;
+  //  * the last snapshot (every array, cementVoxelsToPolyData): each voxel's arrival_time_s, exactly, and at
+  //    most t;
+  //  * the pieces are a base-4 counter's digits (InjectionWriter::snapshotPiece): snapshot k names as many
+  //    pieces as the digits of k + 1 written in base 4 add up to (12 snapshots: 1, 2, 3, 1, 2, ...).
   const fs::path out = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "voxel-darcy-growth";
+  const fs::path flow = fs::path(CEMENTSPH_BINARY_DIR) / "Testing" / "scratch" / "voxel-darcy-growth-flow";
   run(100.0, out, 0.5);
+  run(100.0, flow, 0.5, "flow");
   std::ifstream pvdFile(out / "particles.pvd");
   std::stringstream pvd;
   pvd << pvdFile.rdbuf();
@@ -312,16 +316,22 @@ TEST(VoxelDarcyInjection, GrowthSnapshotsAreTheCementThatHadArrivedEachVoxelWrit
   };
   std::map<std::string, double> arrivalInLast;
   for (vtkIdType i = 0; i < last->GetNumberOfPoints(); ++i) arrivalInLast[key(last->GetPoint(i))] = lastArrival->GetTuple1(i);
-  std::map<std::string, int> pieceOf; // every voxel of every piece, and which piece
+  const std::regex pieceEntry("<Piece Source=\"([^\"]+)\"/>");
   for (std::size_t k = 0; k + 1 < series.size(); ++k) {
     const auto& [t, name] = series[k];
-    char pieceName[64];
-    std::snprintf(pieceName, sizeof pieceName, "particles_%04zu.pvtp", k);
-    ASSERT_EQ(name, pieceName);
-    std::snprintf(pieceName, sizeof pieceName, "particles_piece_%04zu.vtp", k);
-    const auto piece = imaging::readPolyData((out / pieceName).string());
-    for (vtkIdType i = 0; i < piece->GetNumberOfPoints(); ++i)
-      EXPECT_TRUE(pieceOf.emplace(key(piece->GetPoint(i)), int(k)).second) << pieceName << " point " << i << ": written twice";
+    char expected[64];
+    std::snprintf(expected, sizeof expected, "particles_%04zu.pvtp", k);
+    ASSERT_EQ(name, expected);
+    std::ifstream unionFile(out / name);
+    std::stringstream unionText;
+    unionText << unionFile.rdbuf();
+    const std::string u = unionText.str();
+    std::size_t pieces = 0;
+    for (auto it = std::sregex_iterator(u.begin(), u.end(), pieceEntry); it != std::sregex_iterator(); ++it, ++pieces)
+      EXPECT_TRUE(fs::exists(out / (*it)[1].str())) << name << " names " << (*it)[1];
+    std::size_t digits = 0;
+    for (std::size_t count = k + 1; count > 0; count /= 4) digits += count % 4;
+    EXPECT_EQ(pieces, digits) << name;
     auto reader = vtkSmartPointer<vtkXMLPPolyDataReader>::New();
     reader->SetFileName((out / name).string().c_str());
     reader->Update();
@@ -337,12 +347,14 @@ TEST(VoxelDarcyInjection, GrowthSnapshotsAreTheCementThatHadArrivedEachVoxelWrit
       const auto inLast = arrivalInLast.find(at);
       ASSERT_NE(inLast, arrivalInLast.end()) << name << " point " << i << " is not in the last snapshot";
       EXPECT_EQ(arrival->GetTuple1(i), inLast->second) << name << " point " << i;
+      EXPECT_LE(arrival->GetTuple1(i), t * (1 + 1e-6)) << name << " point " << i;
     }
-    std::size_t arrivedByT = 0;
-    for (const auto& [at, arrived] : arrivalInLast) arrivedByT += arrived <= t * (1 + 1e-9) ? 1 : 0;
-    EXPECT_EQ(held.size(), arrivedByT) << name << " at " << t << " s";
+    char flowName[64];
+    std::snprintf(flowName, sizeof flowName, "particles_%04zu.vtp", k);
+    const auto flowSnapshot = imaging::readPolyData((flow / flowName).string());
+    std::set<std::string> flowHeld;
+    for (vtkIdType i = 0; i < flowSnapshot->GetNumberOfPoints(); ++i) flowHeld.insert(key(flowSnapshot->GetPoint(i)));
+    EXPECT_EQ(held, flowHeld) << name << " against the flow run's " << flowName;
     EXPECT_GT(held.size(), 0u) << name;
   }
-  EXPECT_EQ(pieceOf.size(), std::size_t(last->GetNumberOfPoints()) - std::size_t(std::count_if(
-      arrivalInLast.begin(), arrivalInLast.end(), [&](const auto& e) { return e.second > series[series.size() - 2].first * (1 + 1e-9); })));
 }

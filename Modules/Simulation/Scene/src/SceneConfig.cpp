@@ -225,7 +225,7 @@ void applySceneJson(SceneConfig& s, const json& j) {
     else if (key == "snapshot_arrays") {
       s.snapshotArrays = text(v, key);
       if (s.snapshotArrays != "growth" && s.snapshotArrays != "flow")
-        fail(key, "must be \"growth\" (where the cement is: each voxel written once) or \"flow\" (every snapshot "
+        fail(key, "must be \"growth\" (where the cement is, with its arrival times) or \"flow\" (every snapshot "
                   "also holds the pressure, volume and velocity of every voxel) (got \"" + shown(s.snapshotArrays) + "\")");
     }
     else if (key == "simulated_ct_snapshots") {

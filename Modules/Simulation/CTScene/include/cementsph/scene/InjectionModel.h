@@ -164,8 +164,9 @@ public:
   // Snapshots as growth (scene snapshot_arrays "growth", issue 23): the cement that arrived since the previous
   // call (the first call: since the start) as points (mm, the CT's frame) with only arrays that never change
   // afterwards. The driver writes each as a piece and each snapshot as the union of the pieces so far
-  // (particles_NNNN.pvtp), so a point is written once a run, not once a snapshot. Null: the engine's cement
-  // moves (particles), and its snapshots are whole (cement()).
+  // (particles_NNNN.pvtp; InjectionWriter::snapshotPiece merges old pieces), so a point is written about
+  // log(snapshots) times a run, not once a snapshot. Null: the engine's cement moves (particles), and its
+  // snapshots are whole (cement()).
   virtual vtkSmartPointer<vtkPolyData> cementArrivedSinceLastCall() { return nullptr; }
   // The state at the end: stopped, the driver stopped it early.
   virtual void finish(bool stopped) { (void)stopped; }

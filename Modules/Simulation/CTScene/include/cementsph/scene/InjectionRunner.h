@@ -21,9 +21,10 @@
 //                       volume_fraction (the incompressible model's kernel sum), front (1 at the cement front).
 //                       voxel-darcy (docs/scene-figures.md): the last is particles_NNNN.vtp with every array;
 //                       the earlier ones, with snapshot_arrays "growth" (the default), particles_NNNN.pvtp: the
-//                       union of particles_piece_0000.vtp .. NNNN.vtp, each the voxels that took cement in its
-//                       interval with arrival_time_s (each voxel written once a run); with "flow", .vtp files
-//                       that also hold cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s of every voxel
+//                       union of pieces (particles_piece_NNNN.vtp, merged four at a time into
+//                       particles_piece_FFFF-LLLL.vtp), the voxels that took cement by then with arrival_time_s;
+//                       with "flow", .vtp files of every such voxel's cement_volume_mm3, pressure_pa and
+//                       darcy_velocity_m_per_s then
 //   particles.pvd       the ParaView series of the snapshots
 //   simulated_ct.nrrd   the CT's grid within the ROI: HU_sim = HU_pre + k rho_fluid / rho0, rho_fluid the Eq. 2
 //                       fluid density at the voxel centre with h = 2r (ParticleVoxeliser), k = 3000 HU

@@ -5,8 +5,8 @@
 // arrival_time_s, age_s, and as the particles' arrays velocity_m_per_s (the interstitial velocity q / phi) and
 // density_kg_per_m3 (rho0: incompressible), all of them in the last snapshot and the run's result. The snapshots
 // before the last (issue 23: a hundred a run) are, with snapshot_arrays "growth" (the default), the union of
-// pieces each holding the voxels that took cement in its interval with arrival_time_s (cementPiece: each voxel
-// written once a run), and with "flow" every voxel's cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s and
+// pieces holding the voxels that took cement with arrival_time_s (cementPiece; InjectionWriter::snapshotPiece
+// merges them), and with "flow" every voxel's cement_volume_mm3, pressure_pa, darcy_velocity_m_per_s and
 // viscosity (runningCementToPolyData). Also cement_labels.nrrd: a label map on the simulated CT's grid (1
 // cement in bone, 2 leaked cement), which `cementsph inject` draws as cement_slices.png (leaks in red) and 3D
 // Slicer opens as a segmentation.
@@ -257,11 +257,8 @@ struct SnapshotBuffers {
     volumeTime = f.time();
     volumeSteps = f.statistics().steps;
   }
-  // Snapshots as growth: how much of the filling's wet list (in order of arrival) the pieces so far hold, and
-  // the voxels of it without cement yet when their piece was made (a voxel never empties: each goes in the
-  // first piece made after it takes cement).
+  // Snapshots as growth: how much of the filling's wet list (in order of arrival) the pieces so far hold.
   std::size_t piecesHold = 0;
-  std::vector<std::size_t> wetWithoutCement;
 };
 
 // One vertex cell per point (point i in cell i), with 32-bit offsets and connectivity: the files say Int32;
@@ -316,7 +313,7 @@ void addFieldValue(vtkPolyData* poly, const char* name, double value) {
 // velocity_m_per_s is darcy_velocity_m_per_s / porosity and density_kg_per_m3 the rest density
 // (incompressible), a field-data value in every snapshot. 40 bytes a point against the last one's 96.
 vtkSmartPointer<vtkPolyData> runningCementToPolyData(const VoxelDarcyFilling& f, double restDensity,
-                                                     SnapshotBuffers& buffers) {
+                                                     SnapshotBuffers& buffers, bool viscosityPerVoxel) {
   const VoxelMedium& m = f.medium();
   const vtkIdType capacity = vtkIdType(f.wetVoxels().size());
   auto points = vtkSmartPointer<vtkPoints>::New();
@@ -331,8 +328,7 @@ vtkSmartPointer<vtkPolyData> runningCementToPolyData(const VoxelDarcyFilling& f,
         *pressureOut = pressure->GetPointer(0), *velocityOut = velocity->GetPointer(0),
         *viscosityOut = viscosity->GetPointer(0);
   const double mm3PerPoreFill = m.voxelVolume() * 1e9;
-  double volumeMm3 = 0, firstViscosity = 0;
-  bool uniformViscosity = true;
+  double volumeMm3 = 0, viscosityNow = 0;
   vtkIdType n = 0;
   f.forEachWetVoxel([&](std::size_t c, const VoxelDarcyFilling::VoxelState& s) {
     if (!(s.fill > 0)) return;
@@ -343,8 +339,7 @@ vtkSmartPointer<vtkPolyData> runningCementToPolyData(const VoxelDarcyFilling& f,
     volumeOut[n] = float(mm3);
     pressureOut[n] = float(s.pressure);
     for (int a = 0; a < 3; ++a) velocityOut[3 * n + a] = float(s.darcyVelocity[a]);
-    if (n == 0) firstViscosity = s.viscosity;
-    uniformViscosity = uniformViscosity && s.viscosity == firstViscosity;
+    viscosityNow = s.viscosity;
     viscosityOut[n] = float(s.viscosity);
     ++n;
   });
@@ -354,25 +349,25 @@ vtkSmartPointer<vtkPolyData> runningCementToPolyData(const VoxelDarcyFilling& f,
   buffers.keepVolume(f, volumeMm3);
   auto poly = vertexCloud(points);
   for (vtkDataArray* a : std::initializer_list<vtkDataArray*>{volume, pressure, velocity}) poly->GetPointData()->AddArray(a);
-  if (uniformViscosity && n > 0) addFieldValue(poly, "viscosity_pa_s", firstViscosity);
-  else poly->GetPointData()->AddArray(viscosity);
+  // The same layout in every snapshot of a run, so that ParaView colours the whole series alike: a point array
+  // where the law gives each voxel its own viscosity, else the one value (every voxel's, VoxelDarcyFilling::
+  // setViscosity; none before the cement arrives).
+  if (viscosityPerVoxel) poly->GetPointData()->AddArray(viscosity);
+  else if (n > 0) addFieldValue(poly, "viscosity_pa_s", viscosityNow);
   addFieldValue(poly, "density_kg_per_m3", restDensity);
   return poly;
 }
 
 // Snapshots as growth (InjectionModel::cementArrivedSinceLastCall, issue 23): the voxels that took cement
 // since the last piece, in order of arrival, as points with the one array of theirs that never changes,
-// arrival_time_s. 20 bytes a point with its vertex cell, written once a run.
+// arrival_time_s. 24 bytes a point with its vertex cell (12 position, 4 arrival, 8 the cell), written at most
+// log2(snapshots) + 1 times a run (InjectionWriter::snapshotPiece merges the pieces).
 vtkSmartPointer<vtkPolyData> cementPiece(const VoxelDarcyFilling& f, SnapshotBuffers& buffers) {
   const VoxelMedium& m = f.medium();
+  // The wet list's newcomers: a voxel joins it as cement first enters it (VoxelDarcyFilling::wet, then its
+  // fill rises above 0 in the same call) and never leaves it.
   const std::vector<std::size_t>& wet = f.wetVoxels();
-  std::vector<std::size_t> newcomers;
-  newcomers.reserve(buffers.wetWithoutCement.size() + (wet.size() - buffers.piecesHold));
-  std::vector<std::size_t> stillWithout;
-  auto take = [&](std::size_t c) { (f.fill()[c] > 0 ? newcomers : stillWithout).push_back(c); };
-  for (std::size_t c : buffers.wetWithoutCement) take(c);
-  for (std::size_t i = buffers.piecesHold; i < wet.size(); ++i) take(wet[i]);
-  buffers.wetWithoutCement.swap(stillWithout);
+  const std::vector<std::size_t> newcomers(wet.begin() + std::ptrdiff_t(buffers.piecesHold), wet.end());
   buffers.piecesHold = wet.size();
   const vtkIdType n = vtkIdType(newcomers.size());
   auto points = vtkSmartPointer<vtkPoints>::New();
@@ -612,7 +607,7 @@ public:
   // The snapshots during the run hold the reduced set, the last one (after finish) and the result every array.
   vtkSmartPointer<vtkPolyData> cement() const override {
     return finished_ ? cementVoxelsToPolyData(*filling_, rho0_, snapshots_)
-                     : runningCementToPolyData(*filling_, rho0_, snapshots_);
+                     : runningCementToPolyData(*filling_, rho0_, snapshots_, shearThinning_);
   }
   vtkSmartPointer<vtkPolyData> cementArrivedSinceLastCall() override { return cementPiece(*filling_, snapshots_); }
   void finish(bool) override { finished_ = true; }

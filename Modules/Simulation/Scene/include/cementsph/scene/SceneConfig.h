@@ -19,10 +19,11 @@
 //   threshold_hu                    solid where HU > threshold                              paper 0
 //   roi_size_mm                     edge of the cube about the tip that is modelled         paper 40
 //   snapshot_interval_s                                                                     1
-//   snapshot_arrays "growth"|"flow" voxel-darcy: what the snapshots before the last hold: "growth" the cement
-//                                   then (particles_NNNN.pvtp of pieces, each voxel written once, with its
-//                                   arrival time); "flow" also its volume, pressure and Darcy velocity (every
-//                                   voxel every snapshot: a .vtp each; docs/scene-figures.md)     growth
+//   snapshot_arrays "growth"|"flow" voxel-darcy: what the snapshots before the last hold: "growth" the voxels
+//                                   holding cement then with their arrival times (particles_NNNN.pvtp of
+//                                   pieces, a voxel written at most log4(snapshots) + 1 times); "flow" every
+//                                   such voxel's volume, pressure and Darcy velocity then (a .vtp each, every
+//                                   voxel every snapshot; docs/scene-figures.md)                  growth
 //   simulated_ct_snapshots (bool)   also write simulated_ct_NNNN.nrrd at every particle snapshot false
 //                                   (same numbering as particles_NNNN.vtp), simulated_ct_start.nrrd
 //                                   at t = 0 (no cement: the background of X-ray sequences, paper
