@@ -973,19 +973,34 @@ private:
     withdrawal_ = scene_->hasSecondTip() ? *scene_->secondTipWithdrawalMm * 1e-3 : 0.0;
     const double outer = 0.5 * innerDiameter_ + kCannulaWallM;
     const double behind = 0.5 * solid_->grid.spacing.maxCoeff();
-    for (std::size_t c = 0; c < medium.count(); ++c) {
-      const Eigen::Vector3d r = medium.centre(c) - tip_;
-      const double s = r.dot(axis_);
-      if (s < -behind && s >= -cannulaLength_ && (r - s * axis_).norm() <= outer && medium.porosity[c] > 0) {
-        if (withdrawal_ > 0 && s + withdrawal_ >= -behind) {
-          tractVoxels_.push_back(c);
-          tractPorosity_.push_back(medium.porosity[c]);
-          tractPermeability_.push_back(medium.permeability[c]);
-        }
-        medium.porosity[c] = 0.0f;
-        ++shaftVoxels_;
-      }
+    // Only the voxels in the box about the shaft's cylinder (its axis from a cannula length to half a voxel
+    // behind the tip, widened by its outer radius and a voxel) can be in it: visited in voxel order, as a pass
+    // over the whole region would, but in time of the shaft, not the region (issue 23: 7 % of a whole-scan run).
+    const Eigen::Vector3d from = tip_ - cannulaLength_ * axis_, to = tip_ - behind * axis_;
+    int lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      auto index = [&](double x) {
+        return int(std::clamp((x - medium.origin[d]) / medium.spacing[d], -2.0, double(medium.size[d]) + 1.0));
+      };
+      lo[d] = std::max(0, index(std::min(from[d], to[d]) - outer) - 1);
+      hi[d] = std::min(medium.size[d] - 1, index(std::max(from[d], to[d]) + outer) + 1);
     }
+    for (int k = lo[2]; k <= hi[2]; ++k)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int i = lo[0]; i <= hi[0]; ++i) {
+          const std::size_t c = medium.index(i, j, k);
+          const Eigen::Vector3d r = medium.centre(c) - tip_;
+          const double s = r.dot(axis_);
+          if (s < -behind && s >= -cannulaLength_ && (r - s * axis_).norm() <= outer && medium.porosity[c] > 0) {
+            if (withdrawal_ > 0 && s + withdrawal_ >= -behind) {
+              tractVoxels_.push_back(c);
+              tractPorosity_.push_back(medium.porosity[c]);
+              tractPermeability_.push_back(medium.permeability[c]);
+            }
+            medium.porosity[c] = 0.0f;
+            ++shaftVoxels_;
+          }
+        }
   }
 
   // The cannula's pressure drop [Pa]: Hagen-Poiseuille (Eq. 13) or, shear-thinning, the tube integral
