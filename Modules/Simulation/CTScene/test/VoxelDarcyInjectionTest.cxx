@@ -10,7 +10,7 @@
 //    point (issue 23: the snapshots are written on a second thread while the run goes on, with 32-bit vertex
 //    ids), and the snapshots before the last leave out only what the last snapshot and their own arrays give;
 //  * with "growth" (the default), each snapshot before the last is the cement that had arrived by its time,
-//    read by VTK's parallel reader from pieces each voxel is written to once.
+//    read by VTK's parallel reader from pieces merged four at a time (InjectionWriter::snapshotPiece).
 #include "cementsph/imaging/PolyDataIO.h"
 #include "cementsph/imaging/VolumeIO.h"
 #include "cementsph/scene/InjectionRunner.h"
