@@ -324,7 +324,8 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
       break;
     }
     if (model->time() >= nextSnapshot * (1 - 1e-12) && model->time() < endTime) {
-      // The cement first: an engine may give the volume record its snapshot's sum (the voxel engine does).
+      // The cement first: an engine may give the volume record its snapshot's sum (the voxel engine's "flow"
+      // snapshots do; a growth piece holds no volumes, so the record then takes the engine's own pass).
       // As growth where the engine's cement stays where it arrived (the voxel engine), else whole.
       vtkSmartPointer<vtkPolyData> arrived =
           writer.writing() && scene.snapshotArrays == "growth" ? model->cementArrivedSinceLastCall() : nullptr;
