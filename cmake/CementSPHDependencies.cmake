@@ -5,6 +5,10 @@ find_package(OpenMP REQUIRED COMPONENTS CXX)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(NLopt REQUIRED) # cementsph plan (libnlopt-dev)
+# libdeflate (libdeflate-dev): the gzip of the NRRD volumes written (Modules/Imaging/IO/src/NrrdGzip.h). No CMake
+# config in Debian 12's 1.14: the library by path (the installed package links it as it links libz).
+find_path(CEMENTSPH_LIBDEFLATE_INCLUDE_DIR libdeflate.h REQUIRED)
+find_library(CEMENTSPH_LIBDEFLATE_LIBRARY NAMES deflate REQUIRED)
 
 # VTK 9.1: list components explicitly (see shared platform notes). The lists are kept in variables for
 # the installed CementSPHConfig.cmake, which finds the same components again.

@@ -19,6 +19,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
   # derivative-free optimisation for `cementsph plan` (issue 13)
   libnlopt-dev
+  # the gzip of the NRRD volumes written (Modules/Imaging/IO/src/NrrdGzip.h)
+  libdeflate-dev
   # studies and plans spread over ranks under mpirun (issue 13): Open MPI
   openmpi-bin libopenmpi-dev
   # off-screen rendering with no X server: OSMesa first, Mesa's surfaceless EGL where it fails

@@ -4,6 +4,7 @@
 #include "cementsph/imaging/DicomInput.h"
 #include "cementsph/imaging/LibraryMessages.h"
 
+#include "NrrdGzip.h"
 #include "VolumeFileChecks.h"
 
 #include <itkGDCMImageIO.h>
@@ -16,11 +17,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <cctype>
 #include <iostream>
 #include <memory>
+#include <type_traits>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -275,11 +278,35 @@ ImageType::Pointer readVolume(const std::string& path) {
 
 namespace {
 
+// The gzip NRRD path writes the buffer's bytes as they are: NRRD's "endian: little" holds only on such a machine.
+constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+
 template <typename TImage> void writeImage(const TImage* image, const std::string& path, bool compress = true) {
   if (!image) throw std::runtime_error(path + ": nothing to write");
   if (!imageIOForExtension(path) || fullExtension(path) == ".dcm")
     throw std::runtime_error(path + ": unknown output format (use .nrrd, .mha, .nii or .nii.gz)");
+  // A compressed .nrrd on a little-endian machine: the header ITK would write, and the voxels' bytes deflated by
+  // libdeflate (a third of the time ITK's zlib takes on a CT; NrrdGzip.h).
+  const bool gzipHere = compress && fullExtension(path) == ".nrrd" && kLittleEndian &&
+                        image->GetBufferedRegion() == image->GetLargestPossibleRegion();
   writeAtomically(path, [&](const std::string& tmp) {
+    if (gzipHere) {
+      using Pixel = typename TImage::PixelType;
+      static_assert(std::is_same_v<Pixel, float> || std::is_same_v<Pixel, std::uint8_t>, "a volume (float) or a mask (uint8)");
+      const auto region = image->GetLargestPossibleRegion().GetSize();
+      const auto& d = image->GetDirection();
+      std::array<double, 9> direction{};
+      for (unsigned r = 0; r < 3; ++r)
+        for (unsigned c = 0; c < 3; ++c) direction[3 * r + c] = d[r][c];
+      const std::string header = detail::gzipNrrdHeader(
+          std::is_same_v<Pixel, float> ? "float" : "unsigned char", sizeof(Pixel) > 1,
+          {std::size_t(region[0]), std::size_t(region[1]), std::size_t(region[2])}, direction,
+          {image->GetSpacing()[0], image->GetSpacing()[1], image->GetSpacing()[2]},
+          {image->GetOrigin()[0], image->GetOrigin()[1], image->GetOrigin()[2]});
+      detail::writeGzipNrrd(tmp, header, image->GetBufferPointer(),
+                            std::size_t(image->GetLargestPossibleRegion().GetNumberOfPixels()) * sizeof(Pixel));
+      return;
+    }
     auto writer = itk::ImageFileWriter<TImage>::New();
     writer->SetImageIO(imageIOForExtension(path));
     writer->SetFileName(tmp);
