@@ -1,6 +1,6 @@
 // The gzip-encoded NRRD volumes this module writes (writeVolume, writeMask to .nrrd), compressed with
 // libdeflate instead of ITK's writer (Teem's zlib at level 2). The header is the one ITK's NRRD writer gives
-// these images, field for field and in its order (NrrdGzipTest compares the two); the payload is one standard
+// these images, field for field and in its order (ImagingIOTest's NrrdGzip.* compare the two); the payload is one standard
 // gzip member of the voxels' bytes, so every NRRD reader reads it.
 //
 // Why: on a CT the payload is float noise that deflates slowly, and the simulated CT's compression was the

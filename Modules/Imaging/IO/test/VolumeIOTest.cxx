@@ -1,16 +1,25 @@
 // Volume IO: every format keeps origin, spacing and a non-identity direction; DICOM keeps HU;
-// bad input gives a clear std::runtime_error naming the file; writes leave no partial files.
+// bad input gives a clear std::runtime_error naming the file; writes leave no partial files; the NRRD gzip
+// written with libdeflate (NrrdGzip, at the end).
 #include "SyntheticVolumes.h"
 #include "cementsph/imaging/AtomicFile.h"
 #include "cementsph/imaging/VolumeIO.h"
 
 #include <gtest/gtest.h>
 #include <itkImageFileWriter.h>
+#include <itkImageRegionIterator.h>
 #include <itkNrrdImageIO.h>
+#include <zlib.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <locale>
+#include <sstream>
+#include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace cementsph::imaging;
@@ -54,6 +63,58 @@ bool onlyFinalFilesIn(const fs::path& dir) {
   for (const auto& e : fs::directory_iterator(dir))
     if (e.path().filename().string().find(".tmp-") != std::string::npos) return false;
   return true;
+}
+
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A CT-like volume: 61 x 47 x 33 (no size a power of two), HU noise that deflates poorly, a bright ball.
+ImageType::Pointer noisyCt() {
+  Grid g;
+  g.size = {61, 47, 33};
+  g.spacing = {0.6, 0.6, 1.25};
+  g.origin = {-20.0, 15.5, -7.25};
+  const double c = std::cos(0.4), s = std::sin(0.4); // oblique: rotated about x, as a tilted gantry
+  g.direction = {1, 0, 0, 0, c, -s, 0, s, c};
+  auto image = makeImage(g);
+  float* p = image->GetBufferPointer();
+  unsigned state = 12345u;
+  for (std::size_t i = 0; i < image->GetLargestPossibleRegion().GetNumberOfPixels(); ++i) {
+    state = state * 1664525u + 1013904223u; // a linear congruential generator: reproducible noise
+    p[i] = -1000.0f + static_cast<float>(state >> 20) * 0.37f;
+  }
+  return image;
+}
+
+struct Payload {
+  std::string header;
+  std::vector<unsigned char> inflated;
+  int status = 0;              // zlib's last inflate() status
+  std::size_t leftOver = 0;    // input bytes after the gzip member's end
+};
+
+// Inflates the file's payload with zlib (gzip wrapper: windowBits 15 + 16), one member.
+Payload inflateWithZlib(const fs::path& file, std::size_t expectedBytes) {
+  const std::string bytes = slurp(file);
+  Payload out;
+  const std::size_t blank = bytes.find("\n\n");
+  if (blank == std::string::npos) return out;
+  out.header = bytes.substr(0, blank + 2);
+  z_stream z{};
+  if (inflateInit2(&z, 15 + 16) != Z_OK) return out;
+  out.inflated.resize(expectedBytes + 1); // one spare byte: more data than the voxels would show
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data() + blank + 2));
+  z.avail_in = static_cast<uInt>(bytes.size() - blank - 2);
+  z.next_out = out.inflated.data();
+  z.avail_out = static_cast<uInt>(out.inflated.size());
+  out.status = inflate(&z, Z_FINISH);
+  out.inflated.resize(z.total_out);
+  out.leftOver = z.avail_in;
+  inflateEnd(&z);
+  return out;
 }
 
 } // namespace
@@ -195,4 +256,126 @@ TEST(VolumeGeometry, OverlapOfDisjointBoxesIsZero) {
   g.origin = {5, 0, 0};
   auto c = makeImage(g);
   EXPECT_NEAR(overlapVolumeMm3(geometryOf(a), geometryOf(c)), 5.0 * 10 * 10, 1e-9);
+}
+
+// The gzip NRRD volumes writeVolume and writeMask write (src/NrrdGzip.h: the header ITK's writer would give,
+// the voxels deflated by libdeflate). Checked with two decoders that share no code with libdeflate: zlib's
+// inflate on the payload (one gzip member, the voxels' bytes exactly, nothing after it) and ITK's NRRD reader
+// (Teem) through readVolume; and the header against the one ITK's own NRRD writer gives the same image.
+
+TEST(NrrdGzip, AFloatVolumesPayloadIsOneGzipMemberOfItsVoxels) {
+  const fs::path dir = scratch("gzip-float");
+  const auto image = noisyCt();
+  const fs::path path = dir / "ct.nrrd";
+  writeVolume(image, path.string());
+  EXPECT_TRUE(onlyFinalFilesIn(dir)); // ITK's raw file removed
+  const std::size_t n = image->GetLargestPossibleRegion().GetNumberOfPixels();
+  const Payload p = inflateWithZlib(path, n * sizeof(float));
+  EXPECT_NE(p.header.find("\nencoding: gzip\n"), std::string::npos) << p.header;
+  EXPECT_EQ(p.header.find("encoding: raw"), std::string::npos);
+  EXPECT_EQ(p.status, Z_STREAM_END);
+  EXPECT_EQ(p.leftOver, 0u);
+  ASSERT_EQ(p.inflated.size(), n * sizeof(float));
+  EXPECT_EQ(std::memcmp(p.inflated.data(), image->GetBufferPointer(), p.inflated.size()), 0);
+  // Smaller than the voxels (the noise's 12 random bits of 32 leave room), as a compressed file should be.
+  EXPECT_LT(fs::file_size(path), n * sizeof(float));
+
+  // ITK's reader (Teem's gzip) gives every voxel and the geometry back.
+  const auto back = readVolume(path.string());
+  ASSERT_EQ(back->GetLargestPossibleRegion().GetNumberOfPixels(), n);
+  EXPECT_EQ(std::memcmp(back->GetBufferPointer(), image->GetBufferPointer(), n * sizeof(float)), 0);
+  for (unsigned a = 0; a < 3; ++a) {
+    EXPECT_NEAR(back->GetSpacing()[a], image->GetSpacing()[a], 1e-12);
+    EXPECT_NEAR(back->GetOrigin()[a], image->GetOrigin()[a], 1e-12);
+    for (unsigned b = 0; b < 3; ++b) EXPECT_NEAR(back->GetDirection()[a][b], image->GetDirection()[a][b], 1e-12);
+  }
+}
+
+TEST(NrrdGzip, AMasksPayloadIsOneGzipMemberOfItsLabels) {
+  const fs::path dir = scratch("gzip-mask");
+  auto mask = MaskType::New();
+  MaskType::SizeType size;
+  size[0] = 29;
+  size[1] = 31;
+  size[2] = 17;
+  mask->SetRegions(MaskType::RegionType(size));
+  mask->Allocate();
+  std::size_t i = 0;
+  for (itk::ImageRegionIterator<MaskType> it(mask, mask->GetLargestPossibleRegion()); !it.IsAtEnd(); ++it, ++i)
+    it.Set(static_cast<unsigned char>((i * 7919) % 5 == 0 ? i % 4 : 0));
+  const fs::path path = dir / "labels.nrrd";
+  writeMask(mask, path.string());
+  EXPECT_TRUE(onlyFinalFilesIn(dir));
+  const std::size_t n = mask->GetLargestPossibleRegion().GetNumberOfPixels();
+  const Payload p = inflateWithZlib(path, n);
+  EXPECT_NE(p.header.find("\nencoding: gzip\n"), std::string::npos) << p.header;
+  EXPECT_EQ(p.status, Z_STREAM_END);
+  EXPECT_EQ(p.leftOver, 0u);
+  ASSERT_EQ(p.inflated.size(), n);
+  EXPECT_EQ(std::memcmp(p.inflated.data(), mask->GetBufferPointer(), n), 0);
+}
+
+TEST(NrrdGzip, UncompressedWritesStayRaw) {
+  const fs::path dir = scratch("gzip-raw");
+  const auto image = noisyCt();
+  const fs::path path = dir / "ct.nrrd";
+  writeVolume(image, path.string(), /*compress=*/false);
+  const std::string bytes = slurp(path);
+  EXPECT_NE(bytes.find("\nencoding: raw\n"), std::string::npos);
+  const std::size_t n = image->GetLargestPossibleRegion().GetNumberOfPixels() * sizeof(float);
+  ASSERT_GT(bytes.size(), n);
+  EXPECT_EQ(std::memcmp(bytes.data() + bytes.size() - n, image->GetBufferPointer(), n), 0);
+}
+
+// The header, field by field, against the one ITK's NRRD writer gives the same oblique image (written raw):
+// the same fields in the same order, the same values (numbers to 1e-15 relative), but the encoding.
+TEST(NrrdGzip, TheHeaderIsTheOneItksWriterGives) {
+  const fs::path dir = scratch("gzip-header");
+  const auto image = noisyCt();
+  writeVolume(image, (dir / "ours.nrrd").string());
+  writeVolume(image, (dir / "itk.nrrd").string(), /*compress=*/false); // ITK's NrrdImageIO
+  auto headerLines = [](const fs::path& p) {
+    const std::string bytes = slurp(p);
+    std::vector<std::string> lines;
+    std::istringstream in(bytes.substr(0, bytes.find("\n\n")));
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+  };
+  auto numbers = [](const std::string& line) {
+    std::vector<double> v;
+    std::string cleaned = line.substr(line.find(':') + 1);
+    for (char& ch : cleaned)
+      if (ch == '(' || ch == ')' || ch == ',') ch = ' ';
+    std::istringstream in(cleaned);
+    in.imbue(std::locale::classic());
+    for (double x; in >> x;) v.push_back(x);
+    return v;
+  };
+  const auto ours = headerLines(dir / "ours.nrrd"), itk = headerLines(dir / "itk.nrrd");
+  ASSERT_EQ(ours.size(), itk.size());
+  int numeric = 0;
+  for (std::size_t i = 0; i < ours.size(); ++i) {
+    const std::string key = itk[i].substr(0, itk[i].find(':'));
+    ASSERT_EQ(ours[i].substr(0, ours[i].find(':')), key) << "line " << i;
+    if (key == "encoding") {
+      EXPECT_EQ(itk[i], "encoding: raw");
+      EXPECT_EQ(ours[i], "encoding: gzip");
+    } else if (key == "space directions" || key == "space origin") {
+      const auto a = numbers(ours[i]), b = numbers(itk[i]);
+      ASSERT_EQ(a.size(), key == "space origin" ? 3u : 9u) << ours[i];
+      ASSERT_EQ(a.size(), b.size()) << itk[i];
+      for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-15 * (1 + std::abs(b[k]))) << key << " " << k;
+      ++numeric;
+    } else {
+      EXPECT_EQ(ours[i], itk[i]);
+    }
+  }
+  EXPECT_EQ(numeric, 2);
+}
+
+// A write that cannot happen (its folder is missing) is one error, and leaves nothing.
+TEST(NrrdGzip, AWriteThatCannotHappenLeavesNothing) {
+  const fs::path dir = scratch("gzip-unwritable");
+  EXPECT_THROW(writeVolume(noisyCt(), (dir / "missing" / "ct.nrrd").string()), std::runtime_error);
+  EXPECT_TRUE(fs::is_empty(dir));
 }
