@@ -108,19 +108,6 @@ def med(rs, key):
     return statistics.median(v) if v else float("nan")
 
 
-def paired(name, volume, **kw):
-    """REPEATS interleaved pairs (baseline, current; the order alternating); medians."""
-    res = {"current": [], "baseline": []}
-    for rep in range(REPEATS):
-        order = [("current", CURRENT), ("baseline", BASE)]
-        if rep % 2 == 0:
-            order.reverse()
-        for variant, binary in order:
-            if binary:
-                res[variant].append(inject(binary, "%s-%s-%d" % (name, variant, rep), volume, **kw))
-    return res
-
-
 def demote(text):
     """A peer benchmark's own Markdown, its headings two levels down (under this file's ###)."""
     return re.sub(r"(?m)^(#+) ", lambda m: "#" * min(len(m.group(1)) + 2, 6) + " ", text)
@@ -153,7 +140,18 @@ start_load = load()
 if want("voxel"):
     # 1. The voxel injection on the bundled phantom (the paper's scene, 1 thread), against the baseline.
     volumes = [1, 5] if QUICK else [1, 5, 10]
-    phantom = {v: paired("phantom-%gml" % v, v) for v in volumes}
+    # Rounds over every volume and both builds (the volumes' order and the builds' alternating), so that a
+    # drift of the machine's speed over the minutes falls on every volume alike: the growth ratios are taken
+    # round by round (runs a minute apart), their median quoted.
+    phantom = {v: {"current": [], "baseline": []} for v in volumes}
+    for rep in range(REPEATS):
+        for v in (volumes if rep % 2 == 0 else list(reversed(volumes))):
+            order = [("current", CURRENT), ("baseline", BASE)]
+            if rep % 2 == 0:
+                order.reverse()
+            for variant, binary in order:
+                if binary:
+                    phantom[v][variant].append(inject(binary, "phantom-%gml-%s-%d" % (v, variant, rep), v))
     rows = ["| volume | build | wall (s) | CPU (s) | peak memory (MB) | solves | CG iterations, mean | solve (s) | tip pressure (Pa) |",
             "|---|---|---|---|---|---|---|---|---|"]
     for v in volumes:
@@ -171,17 +169,20 @@ if want("voxel"):
                         "%s x faster (CPU), %s x (wall)" % (ratio(med(base, "cpu"), med(cur, "cpu")), ratio(med(base, "wall"), med(cur, "wall"))) if base else "n/a", cmd))
         summary.append(("  its pressure solve", "%s s, %s CG iterations/solve" % (fmt(med(cur, "solve_s")), fmt(med(cur, "iterations"), "%.1f")),
                         "%s x faster, %s x fewer iterations" % (ratio(med(base, "solve_s"), med(cur, "solve_s")), ratio(med(base, "iterations"), med(cur, "iterations"), "%.1f")) if base else "n/a", "(metrics.json)"))
-    growth = ["| build | CPU 5 ml / 1 ml | exponent 1-5 ml | CPU 10 ml / 5 ml | exponent 5-10 ml |", "|---|---|---|---|---|"]
+    growth = ["| build | CPU 5 ml / 1 ml | exponent 1-5 ml | CPU 10 ml / 5 ml (median of the rounds' ratios) | exponent 5-10 ml |", "|---|---|---|---|---|"]
     for variant in ("baseline", "current"):
         c = {v: med(phantom[v][variant], "cpu") for v in volumes if phantom[v][variant]}
         if 1 not in c or 5 not in c:
             continue
         e15 = math.log(c[5] / c[1]) / math.log(5)
-        r510 = c[10] / c[5] if 10 in c else float("nan")
+        rounds = [a["cpu"] / b["cpu"] for a, b in zip(phantom[10][variant], phantom[5][variant])
+                  if a.get("rc") == 0 and b.get("rc") == 0] if 10 in c else []
+        r510 = statistics.median(rounds) if rounds else float("nan")  # round by round (above)
         e510 = math.log(r510) / math.log(2) if 10 in c else float("nan")
         growth.append("| %s | %.2f | %.2f | %s | %s |" % (variant, c[5] / c[1], e15, fmt(r510), fmt(e510)))
         if variant == "current":
-            summary.append(("voxel inject cost growth with volume", "CPU ~ V^%.2f (1-5 ml)%s" % (e15, ", V^%.2f (5-10 ml): 10 ml = %.2f x 5 ml" % (e510, r510) if 10 in c else ""),
+            summary.append(("voxel inject cost growth with volume", "CPU ~ V^%.2f (1-5 ml)%s" % (e15, ", V^%.2f (5-10 ml): 10 ml = %.2f x 5 ml (median of %d rounds' ratios; %s-%s)" % (
+                                e510, r510, len(rounds), fmt(min(rounds)), fmt(max(rounds))) if rounds else ""),
                             "target 10 ml <= 2.5 x 5 ml: %s" % ("met" if r510 <= 2.5 else "not met") if 10 in c else "n/a", "(the runs above)"))
     details.append("### Voxel Darcy injection, bundled phantom (94 x 94 x 88 voxels), paper scene, 1 thread\n\n"
                    "Medians of %d interleaved run(s) per build; CPU = user + system of the process.\n\n%s\n\nCost growth (CPU time):\n\n%s\n"
@@ -196,10 +197,23 @@ if want("region"):
             sys.exit("run-all.sh: could not make the large phantom (see %s.log)" % big)
     bigTip = "47.705,46.295,48.25"  # a pore voxel near the centre of seed 1's 80 mm block
     bigVolume = 1 if QUICK else 5
-    region = {}
-    for roi in (40, 200):
-        region[roi] = paired("region-%dmm" % roi, bigVolume, ct=os.path.join(big, "pre.nrrd"), tip=bigTip,
-                             extra=["--set", "roi_size_mm=%d" % roi, "--allow-large"])
+    # Rounds over both regions and both builds (orders alternating), as the voxel section's volumes: the ratio
+    # is taken round by round, runs a few seconds apart, and its median quoted.
+    region = {roi: {"current": [], "baseline": []} for roi in (40, 200)}
+    for rep in range(REPEATS):
+        for roi in ((40, 200) if rep % 2 == 0 else (200, 40)):
+            order = [("current", CURRENT), ("baseline", BASE)]
+            if rep % 2 == 0:
+                order.reverse()
+            for variant, binary in order:
+                if binary:
+                    region[roi][variant].append(inject(binary, "region-%dmm-%s-%d" % (roi, variant, rep), bigVolume,
+                                                       ct=os.path.join(big, "pre.nrrd"), tip=bigTip,
+                                                       extra=["--set", "roi_size_mm=%d" % roi, "--allow-large"]))
+
+    def roundRatio(variant, key):
+        v = [a[key] / b[key] for a, b in zip(region[200][variant], region[40][variant]) if a.get("rc") == 0 and b.get("rc") == 0]
+        return statistics.median(v) if v else float("nan")
     # The per-step passes other than the solve (numbering, front, assembly: metrics' pressure_assembly_wall_s)
     # are what a region-sized data structure would slow down; the peak memory is the whole process's.
     # "Outside the loop": the process's wall time less metrics.json's wall_time_s (start-up, reading the CT, writing
@@ -226,14 +240,13 @@ if want("region"):
     for variant in ("baseline", "current"):
         a, b = region[200][variant], region[40][variant]
         if a and b:
-            rows.append("\n%s: whole scan / 40 mm = %s x CPU, %s x wall, %s x memory, %s x solve time" % (
-                variant, ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "wall"), med(b, "wall")),
-                ratio(med(a, "rss_mb"), med(b, "rss_mb")), ratio(med(a, "solve_s"), med(b, "solve_s"))))
+            rows.append("\n%s: whole scan / 40 mm (medians of the rounds' ratios) = %s x CPU, %s x wall, %s x memory, %s x solve time" % (
+                variant, fmt(roundRatio(variant, "cpu")), fmt(roundRatio(variant, "wall")),
+                fmt(roundRatio(variant, "rss_mb")), fmt(roundRatio(variant, "solve_s"))))
     a, b = region[200]["current"], region[40]["current"]
     summary.append(("voxel inject %g ml, whole-scan region / 40 mm region (200 x 200 x 188 CT)" % bigVolume,
-                    "%s x CPU, %s x memory" % (ratio(med(a, "cpu"), med(b, "cpu")), ratio(med(a, "rss_mb"), med(b, "rss_mb"))),
-                    "baseline: %s x CPU, %s x memory" % (ratio(med(region[200]["baseline"], "cpu"), med(region[40]["baseline"], "cpu")),
-                                                       ratio(med(region[200]["baseline"], "rss_mb"), med(region[40]["baseline"], "rss_mb"))) if BASE else "n/a",
+                    "%s x CPU, %s x memory (medians of %d rounds' ratios)" % (fmt(roundRatio("current", "cpu")), fmt(roundRatio("current", "rss_mb")), len(a)),
+                    "baseline: %s x CPU, %s x memory" % (fmt(roundRatio("baseline", "cpu")), fmt(roundRatio("baseline", "rss_mb"))) if BASE else "n/a",
                     # the whole-scan run's command, its region setting kept (only the output folder dropped)
                     "cementsph " + re.sub(r" --out \S+", "", a[0]["cmd"])))
     details.append("### Whole-scan region against the 40 mm region (`cementsph phantom --size-mm 80`: 200 x 200 x 188 voxels), %g ml, 1 thread\n\n%s\n"
