@@ -1,7 +1,9 @@
 // The gzip-encoded NRRD volumes this module writes (writeVolume, writeMask to .nrrd), compressed with
 // libdeflate instead of ITK's writer (Teem's zlib at level 2). The header is the one ITK's NRRD writer gives
-// these images, field for field and in its order (ImagingIOTest's NrrdGzip.* compare the two); the payload is one standard
-// gzip member of the voxels' bytes, so every NRRD reader reads it.
+// these images, field for field and in its order (ImagingIOTest's NrrdGzip.* compare the two); the payload
+// is one standard gzip member of the voxels' bytes, so every NRRD reader reads it. (Lines ITK would copy from
+// an image's metadata dictionary, `key:=value`, are not written; the simulated CTs and label maps ITK wrote
+// before held none.)
 //
 // Why: on a CT the payload is float noise that deflates slowly, and the simulated CT's compression was the
 // largest single cost of an injection on a clinical-size scan (0.86 s of 3.0 s on a 200 x 200 x 188 CT, the

@@ -23,9 +23,9 @@
 #include <cctype>
 #include <iostream>
 #include <memory>
-#include <type_traits>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 namespace cementsph::imaging {

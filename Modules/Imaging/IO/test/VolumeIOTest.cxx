@@ -65,13 +65,12 @@ bool onlyFinalFilesIn(const fs::path& dir) {
   return true;
 }
 
-
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// A CT-like volume: 61 x 47 x 33 (no size a power of two), HU noise that deflates poorly, a bright ball.
+// A CT-like volume: 61 x 47 x 33 (no size a power of two), oblique, of HU noise that deflates poorly.
 ImageType::Pointer noisyCt() {
   Grid g;
   g.size = {61, 47, 33};
@@ -92,8 +91,8 @@ ImageType::Pointer noisyCt() {
 struct Payload {
   std::string header;
   std::vector<unsigned char> inflated;
-  int status = 0;              // zlib's last inflate() status
-  std::size_t leftOver = 0;    // input bytes after the gzip member's end
+  int status = 0;           // zlib's last inflate() status
+  std::size_t leftOver = 0; // input bytes after the gzip member's end
 };
 
 // Inflates the file's payload with zlib (gzip wrapper: windowBits 15 + 16), one member.
