@@ -11,6 +11,7 @@
 #                  run in the same session, interleaved with the measured build. Without it the voxel
 #                  figures have no "before" column. See BENCHMARKS.md for how the quoted baseline was made.
 #   REPEATS=N      repetitions of each voxel run (default 3; QUICK: 1); medians are quoted
+#   KEEP_RUNS=1    keep each run's output folder under OUT_DIR/runs (default: removed once its metrics are read)
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
 #   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
 #                  whole-scan region against the 40 mm one), threads, snapshots (5 ml with its 100 snapshots
@@ -28,14 +29,15 @@ case "$BUILD" in /*) ;; *) BUILD=$ROOT/$BUILD ;; esac
 OUT=${1:-/tmp/cementsph-bench-$(date -u +%Y%m%dT%H%M%SZ)}
 mkdir -p "$OUT"
 export ROOT BUILD OUT
-export QUICK=${QUICK:-0} BASELINE=${BASELINE:-} REPEATS=${REPEATS:-} IMAGING_ARGS=${IMAGING_ARGS:---only=registration} ONLY=${ONLY:-}
+export QUICK=${QUICK:-0} BASELINE=${BASELINE:-} REPEATS=${REPEATS:-} KEEP_RUNS=${KEEP_RUNS:-0} IMAGING_ARGS=${IMAGING_ARGS:---only=registration} ONLY=${ONLY:-}
 exec python3 - "$@" <<'PYTHON'
-import datetime, json, math, os, re, statistics, subprocess, sys, time
+import datetime, json, math, os, re, shutil, statistics, subprocess, sys, time
 
 ROOT, BUILD, OUT = os.environ["ROOT"], os.environ["BUILD"], os.environ["OUT"]
 QUICK = os.environ.get("QUICK", "0") not in ("", "0")
 BASELINE = os.environ.get("BASELINE", "")
 REPEATS = int(os.environ.get("REPEATS") or (1 if QUICK else 3))
+KEEP_RUNS = os.environ.get("KEEP_RUNS", "0") not in ("", "0")
 started = datetime.datetime.now(datetime.timezone.utc)
 loads = []
 os.makedirs(os.path.join(OUT, "runs"), exist_ok=True)
@@ -95,7 +97,13 @@ def inject(binary, tag, volume, threads=1, env=None, ct=CT, tip=TIP, extra=()):
         r.update(loop_s=m.get("wall_time_s"), steps=m.get("pressure_solves"), iterations=m.get("pressure_solver_iterations_mean"),
                  solve_s=m.get("pressure_solve_wall_s"), assembly_s=m.get("pressure_assembly_wall_s"),
                  tip_pa=m.get("final_tip_pressure_pa"), cement_voxels=m.get("cement_voxels"),
-                 spread_mm=m.get("mean_spreading_distance_mm"))
+                 spread_mm=m.get("mean_spreading_distance_mm"), step_count=m.get("steps", m.get("pressure_solves")),
+                 points=m.get("cement_points"),
+                 mb=sum(os.path.getsize(os.path.join(out, f)) for f in os.listdir(out)) / 1e6)  # the files the run wrote
+    # The run's files go once read (a full run of this script wrote ~8 GB of snapshots and filled a disk);
+    # KEEP_RUNS=1 keeps them.
+    if not KEEP_RUNS:
+        shutil.rmtree(out, ignore_errors=True)
     runs_log.write(json.dumps(r) + "\n")
     runs_log.flush()
     print("  %-28s %6.2f s wall %6.2f s CPU %7.0f MB  load %.2f" % (tag, r["wall"], r["cpu"], r["rss_mb"], loads[-1]),
@@ -304,10 +312,7 @@ if want("snapshots"):
             order = kinds if rep % 2 == 0 else list(reversed(kinds))
             for n, (kind, extra) in enumerate(order):
                 tag = "snapshots-%s-%d-%d" % (variant, kinds.index((kind, extra)), rep)
-                r = inject(binary, tag, 5, extra=extra)
-                folder = os.path.join(OUT, "runs", tag)
-                r["mb"] = sum(os.path.getsize(os.path.join(folder, f)) for f in os.listdir(folder)) / 1e6 if r["rc"] == 0 else None
-                runs[kind].append(r)
+                runs[kind].append(inject(binary, tag, 5, extra=extra))
         without = runs[kinds[-1][0]]
         for kind, _ in kinds:
             rs = runs[kind]
@@ -346,10 +351,6 @@ if want("particles") and not QUICK:
                 tag = "engine-%s-%gml-%d" % (engine, vol, rep)
                 r = inject(CURRENT, tag, vol, extra=["--preset", "paper"] if engine == "paper" else ["--set", "pressure_model=%s" % engine])
                 if r["rc"] == 0:
-                    with open(os.path.join(OUT, "runs", tag, "metrics.json")) as f:
-                        m = json.load(f)
-                    r["step_count"] = m.get("steps", m.get("pressure_solves"))
-                    r["points"] = m.get("cement_points")
                     if r.get("steps") and r.get("solve_s") is not None:
                         r["ms_per_solve"] = 1e3 * r["solve_s"] / r["steps"]
                     if r["points"] and r["step_count"] and r["cpu"] > 0:
