@@ -111,9 +111,32 @@ def inject(binary, tag, volume, threads=1, env=None, ct=CT, tip=TIP, extra=()):
     return r
 
 
-def med(rs, key):
-    v = [r[key] for r in rs if r.get("rc") == 0 and r.get(key) is not None]
+def medianOf(v):
     return statistics.median(v) if v else float("nan")
+
+
+def med(rs, key):
+    return medianOf([r[key] for r in rs if r.get("rc") == 0 and r.get(key) is not None])
+
+
+def interleaved(cases, tag):
+    """REPEATS rounds over every case and both builds, the cases' order and the builds' alternating from round to
+    round, so that a drift of the machine's speed over the minutes (~30 % within a run on the 2-core machine) falls
+    on every case alike. cases: {key: (volume in ml, inject()'s keyword arguments)}; tag(key): the runs' name."""
+    res = {key: {"current": [], "baseline": []} for key in cases}
+    for rep in range(REPEATS):
+        order = [("baseline", BASE), ("current", CURRENT)] if rep % 2 == 0 else [("current", CURRENT), ("baseline", BASE)]
+        for key in (list(cases) if rep % 2 == 0 else list(cases)[::-1]):
+            volume, kw = cases[key]
+            for variant, binary in order:
+                if binary:
+                    res[key][variant].append(inject(binary, "%s-%s-%d" % (tag(key), variant, rep), volume, **kw))
+    return res
+
+
+def roundRatios(a, b, key):
+    """a's key over b's, round by round (interleaved(): the two runs of a round are a minute apart)."""
+    return [x[key] / y[key] for x, y in zip(a, b) if x.get("rc") == 0 and y.get("rc") == 0 and x.get(key) and y.get(key)]
 
 
 def demote(text):
@@ -148,18 +171,8 @@ start_load = load()
 if want("voxel"):
     # 1. The voxel injection on the bundled phantom (the paper's scene, 1 thread), against the baseline.
     volumes = [1, 5] if QUICK else [1, 5, 10]
-    # Rounds over every volume and both builds (the volumes' order and the builds' alternating), so that a
-    # drift of the machine's speed over the minutes falls on every volume alike: the growth ratios are taken
-    # round by round (runs a minute apart), their median quoted.
-    phantom = {v: {"current": [], "baseline": []} for v in volumes}
-    for rep in range(REPEATS):
-        for v in (volumes if rep % 2 == 0 else list(reversed(volumes))):
-            order = [("current", CURRENT), ("baseline", BASE)]
-            if rep % 2 == 0:
-                order.reverse()
-            for variant, binary in order:
-                if binary:
-                    phantom[v][variant].append(inject(binary, "phantom-%gml-%s-%d" % (v, variant, rep), v))
+    # The growth ratios are taken round by round (interleaved()), their median quoted.
+    phantom = interleaved({v: (v, {}) for v in volumes}, lambda v: "phantom-%gml" % v)
     rows = ["| volume | build | wall (s) | CPU (s) | peak memory (MB) | solves | CG iterations, mean | solve (s) | tip pressure (Pa) |",
             "|---|---|---|---|---|---|---|---|---|"]
     for v in volumes:
@@ -183,9 +196,8 @@ if want("voxel"):
         if 1 not in c or 5 not in c:
             continue
         e15 = math.log(c[5] / c[1]) / math.log(5)
-        rounds = [a["cpu"] / b["cpu"] for a, b in zip(phantom[10][variant], phantom[5][variant])
-                  if a.get("rc") == 0 and b.get("rc") == 0] if 10 in c else []
-        r510 = statistics.median(rounds) if rounds else float("nan")  # round by round (above)
+        rounds = roundRatios(phantom[10][variant], phantom[5][variant], "cpu") if 10 in c else []
+        r510 = medianOf(rounds)
         e510 = math.log(r510) / math.log(2) if 10 in c else float("nan")
         growth.append("| %s | %.2f | %.2f | %s | %s |" % (variant, c[5] / c[1], e15, fmt(r510), fmt(e510)))
         if variant == "current":
@@ -205,23 +217,13 @@ if want("region"):
             sys.exit("run-all.sh: could not make the large phantom (see %s.log)" % big)
     bigTip = "47.705,46.295,48.25"  # a pore voxel near the centre of seed 1's 80 mm block
     bigVolume = 1 if QUICK else 5
-    # Rounds over both regions and both builds (orders alternating), as the voxel section's volumes: the ratio
-    # is taken round by round, runs a few seconds apart, and its median quoted.
-    region = {roi: {"current": [], "baseline": []} for roi in (40, 200)}
-    for rep in range(REPEATS):
-        for roi in ((40, 200) if rep % 2 == 0 else (200, 40)):
-            order = [("current", CURRENT), ("baseline", BASE)]
-            if rep % 2 == 0:
-                order.reverse()
-            for variant, binary in order:
-                if binary:
-                    region[roi][variant].append(inject(binary, "region-%dmm-%s-%d" % (roi, variant, rep), bigVolume,
-                                                       ct=os.path.join(big, "pre.nrrd"), tip=bigTip,
-                                                       extra=["--set", "roi_size_mm=%d" % roi, "--allow-large"]))
+    # The ratio is taken round by round (interleaved()), its median quoted.
+    region = interleaved({roi: (bigVolume, dict(ct=os.path.join(big, "pre.nrrd"), tip=bigTip,
+                                                extra=["--set", "roi_size_mm=%d" % roi, "--allow-large"])) for roi in (40, 200)},
+                         lambda roi: "region-%dmm" % roi)
 
     def roundRatio(variant, key):
-        v = [a[key] / b[key] for a, b in zip(region[200][variant], region[40][variant]) if a.get("rc") == 0 and b.get("rc") == 0]
-        return statistics.median(v) if v else float("nan")
+        return medianOf(roundRatios(region[200][variant], region[40][variant], key))
     # The per-step passes other than the solve (numbering, front, assembly: metrics' pressure_assembly_wall_s)
     # are what a region-sized data structure would slow down; the peak memory is the whole process's.
     # "Outside the loop": the process's wall time less metrics.json's wall_time_s (start-up, reading the CT, writing

@@ -16,6 +16,7 @@
 #include <itkNrrdImageIO.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -293,18 +294,18 @@ template <typename TImage> void writeImage(const TImage* image, const std::strin
     if (gzipHere) {
       using Pixel = typename TImage::PixelType;
       static_assert(std::is_same_v<Pixel, float> || std::is_same_v<Pixel, std::uint8_t>, "a volume (float) or a mask (uint8)");
-      const auto region = image->GetLargestPossibleRegion().GetSize();
+      const auto size = image->GetLargestPossibleRegion().GetSize();
+      const std::array<std::size_t, 3> voxels{std::size_t(size[0]), std::size_t(size[1]), std::size_t(size[2])};
       const auto& d = image->GetDirection();
       std::array<double, 9> direction{};
       for (unsigned r = 0; r < 3; ++r)
         for (unsigned c = 0; c < 3; ++c) direction[3 * r + c] = d[r][c];
       const std::string header = detail::gzipNrrdHeader(
           std::is_same_v<Pixel, float> ? "float" : "unsigned char", sizeof(Pixel) > 1,
-          {std::size_t(region[0]), std::size_t(region[1]), std::size_t(region[2])}, direction,
+          voxels, direction,
           {image->GetSpacing()[0], image->GetSpacing()[1], image->GetSpacing()[2]},
           {image->GetOrigin()[0], image->GetOrigin()[1], image->GetOrigin()[2]});
-      detail::writeGzipNrrd(tmp, header, image->GetBufferPointer(),
-                            std::size_t(image->GetLargestPossibleRegion().GetNumberOfPixels()) * sizeof(Pixel));
+      detail::writeGzipNrrd(tmp, header, image->GetBufferPointer(), voxels[0] * voxels[1] * voxels[2] * sizeof(Pixel));
       return;
     }
     auto writer = itk::ImageFileWriter<TImage>::New();
