@@ -364,8 +364,12 @@ VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings setting
   for (int a = 0; a < 3; ++a)
     if (medium_.size[a] < 1 || !(medium_.spacing[a] > 0) || !std::isfinite(medium_.spacing[a]))
       throw std::invalid_argument("voxel Darcy: the grid needs at least one voxel and a positive spacing per axis");
-  if (medium_.porosity.size() != n || medium_.permeability.size() != n)
+  const bool uniformK = medium_.permeability.empty();
+  if (medium_.porosity.size() != n || (!uniformK && medium_.permeability.size() != n))
     throw std::invalid_argument("voxel Darcy: porosity and permeability need one value per voxel");
+  if (uniformK && (!(medium_.uniformPermeability > 0) || !std::isfinite(medium_.uniformPermeability)))
+    throw std::invalid_argument("voxel Darcy: the uniform permeability " + std::to_string(medium_.uniformPermeability) +
+                                " m^2 is not a positive number");
   if (!(settings_.maxFillPerStep > 0 && settings_.maxFillPerStep <= 1))
     throw std::invalid_argument("voxel Darcy: maxFillPerStep must be in (0, 1]");
   voxelVolume_ = medium_.voxelVolume();
@@ -374,8 +378,17 @@ VoxelDarcyFilling::VoxelDarcyFilling(VoxelMedium medium, FillingSettings setting
     faceArea_[std::size_t(a)] = voxelVolume_ / medium_.spacing[a];
   }
   // A voxel is closed (impermeable) where its porosity is 0, a pore voxel where it is above: state() reads it.
-  for (std::size_t c = 0; c < n; ++c) {
-    const double phi = medium_.porosity[c], k = medium_.permeability[c];
+  // Checked in one branch-free pass (a count of bad voxels, vectorised), the first bad voxel named only when
+  // there is one: a branch per voxel was a region-sized cost (issue 23).
+  std::size_t bad = 0;
+  const float* phiAt = medium_.porosity.data();
+  for (std::size_t c = 0; c < n; ++c) bad += !(phiAt[c] >= 0.0f && phiAt[c] <= 1.0f);
+  if (!uniformK) {
+    const double* kAt = medium_.permeability.data();
+    for (std::size_t c = 0; c < n; ++c) bad += phiAt[c] > 0.0f && !(kAt[c] > 0 && kAt[c] <= std::numeric_limits<double>::max());
+  }
+  for (std::size_t c = 0; bad && c < n; ++c) {
+    const double phi = medium_.porosity[c], k = medium_.permeabilityAt(c);
     if (!(phi >= 0 && phi <= 1))
       throw std::invalid_argument("voxel Darcy: porosity " + std::to_string(phi) + " at voxel " + mm(medium_.centre(c)) +
                                   " is outside [0, 1]");
@@ -400,7 +413,10 @@ void VoxelDarcyFilling::openVoxels(const std::vector<std::size_t>& voxels, const
     pendingDt_ = 0; // the medium changed: the next step solves afresh
     frontStale_ = true; // and its front is searched afresh (the voxel may border the cement)
     medium_.porosity[c] = porosity[i]; // > 0: the voxel is a pore voxel from now on
-    medium_.permeability[c] = permeability[i];
+    // A uniform medium stays one value while the opened voxel has it; another value makes it an array.
+    if (medium_.permeability.empty() && permeability[i] != medium_.uniformPermeability)
+      medium_.permeability.assign(medium_.count(), medium_.uniformPermeability);
+    if (!medium_.permeability.empty()) medium_.permeability[c] = permeability[i];
     const VoxelBricks::Cell cell = bricks_.find(c);
     if (cell.brick) cell.set(VoxelBricks::kClosedFlag, false);
   }
@@ -457,7 +473,7 @@ void VoxelDarcyFilling::setShearRateViscosity(std::function<double(double)> law,
 void VoxelDarcyFilling::updateShearViscosity() {
   for (std::size_t c : filled_) {
     const double q = darcyVelocity(c).norm();
-    const double mu = shearLaw_(rheology::darcyShearRate(q, medium_.permeability[c], medium_.porosity[c], flowIndex_));
+    const double mu = shearLaw_(rheology::darcyShearRate(q, medium_.permeabilityAt(c), medium_.porosity[c], flowIndex_));
     if (!(mu > 0) || !std::isfinite(mu))
       throw FillingError("voxel Darcy: the viscosity law gave " + std::to_string(mu) + " Pa s at " + mm(medium_.centre(c)));
     const VoxelBricks::Cell cell = touch(c);

@@ -24,7 +24,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <random>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace cementsph::voxeldarcy {
 namespace {
@@ -190,6 +194,72 @@ TEST(VoxelDarcyFilling, AVoxelOpenedAfterTheCementReachedItsBrickLetsTheCementTh
   filling.openVoxels({5}, {1.0f}, {kK});
   inject(filling, kQ, 9.5 * pore);
   for (std::size_t c = 0; c < 20; ++c) EXPECT_NEAR(filling.fill()[c], c < 9 ? 1.0 : c == 9 ? 0.5 : 0.0, 1e-9) << "voxel " << c;
+}
+
+// A pore-resolved medium's one permeability held as a value (VoxelMedium::uniformPermeability, no array; issue 23)
+// against the same value in every voxel of an array: the same filling and pressures bit for bit, also after a
+// closed voxel is opened with another permeability (which makes the medium an array from then on). And the
+// checks of the medium still name what is wrong.
+TEST(VoxelDarcyFilling, AUniformPermeabilityValueIsTheArrayOfItBitForBit) {
+  VoxelMedium array = cube(1.0, kK);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<std::size_t> closed;
+  for (std::size_t c = 0; c < array.count(); ++c)
+    if (u(rng) < 0.3 && (array.centre(c).norm() > 1.2e-3)) {
+      array.porosity[c] = 0.0f;
+      if (closed.size() < 40 && array.centre(c).norm() < 2.5e-3) closed.push_back(c);
+    }
+  ASSERT_EQ(closed.size(), 40u);
+  VoxelMedium value = array;
+  std::vector<double>().swap(value.permeability);
+  value.uniformPermeability = kK;
+  auto run = [&](const VoxelMedium& m) {
+    VoxelDarcyFilling f(m);
+    f.setSource(Eigen::Vector3d::Zero(), 1.0e-3);
+    f.setViscosity(kMu);
+    std::vector<double> pressures;
+    inject(f, kQ, 0.1e-6);
+    pressures.push_back(f.sourcePressure());
+    f.openVoxels(closed, std::vector<float>(closed.size(), 1.0f), std::vector<double>(closed.size(), 3 * kK));
+    inject(f, kQ, 0.2e-6);
+    pressures.push_back(f.sourcePressure());
+    std::vector<double> fill(m.count());
+    for (std::size_t c = 0; c < m.count(); ++c) fill[c] = f.fill()[c];
+    return std::make_pair(fill, pressures);
+  };
+  const auto a = run(array), b = run(value);
+  EXPECT_GT(a.second[0], 0.0);
+  EXPECT_NE(a.second[0], a.second[1]);
+  EXPECT_EQ(a.second, b.second);
+  ASSERT_EQ(a.first.size(), b.first.size());
+  std::size_t differ = 0, filled = 0;
+  for (std::size_t c = 0; c < a.first.size(); ++c) {
+    differ += a.first[c] != b.first[c];
+    filled += a.first[c] > 0;
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(filled, 100u);
+
+  VoxelMedium bad = value;
+  bad.uniformPermeability = 0.0;
+  EXPECT_THROW(VoxelDarcyFilling{bad}, std::invalid_argument);
+  bad = value;
+  bad.porosity[7] = std::numeric_limits<float>::quiet_NaN();
+  try {
+    VoxelDarcyFilling f(bad);
+    ADD_FAILURE() << "a NaN porosity was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("porosity nan at voxel"), std::string::npos) << e.what();
+  }
+  bad = array;
+  bad.permeability[array.index(30, 30, 30)] = std::numeric_limits<double>::infinity();
+  try {
+    VoxelDarcyFilling f(bad);
+    ADD_FAILURE() << "an infinite permeability was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("permeability inf m^2 at the pore voxel"), std::string::npos) << e.what();
+  }
 }
 
 // Radial power-law Darcy flow (issue "Cement rheology"): with mu = K gamma_dot^(n-1) and the Darcy-scale

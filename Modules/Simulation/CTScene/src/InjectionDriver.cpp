@@ -169,25 +169,28 @@ imaging::MaskType::Pointer labelsOnInputGrid(const imaging::ImageType* input, co
 
 // Cement in the outermost voxels of the region: where that face is the scan's edge the cement may go on beyond
 // what the CT shows; elsewhere the region (roi_size_mm) cut it. Either is a warning (and a plan limit).
-void edgeWarnings(const imaging::ImageType& ct, const PorousSolid& solid, const std::vector<double>& density,
+void edgeWarnings(const imaging::ImageType& ct, const PorousSolid& solid, const SparseDensity& density,
                   InjectionSummary& s) {
   const auto size = ct.GetLargestPossibleRegion().GetSize();
   const std::array<int, 3> n = solid.grid.size;
+  // Which of the region's six faces hold cement (a voxel in the face's layer with density > 0): a pass over the
+  // cement, not over the faces' voxels.
+  bool onFace[3][2] = {{false, false}, {false, false}, {false, false}};
+  for (const auto& [c, rho] : density) {
+    if (!(rho > 0)) continue;
+    const std::size_t row = c / std::size_t(n[0]);
+    const std::array<int, 3> ijk{int(c % std::size_t(n[0])), int(row % std::size_t(n[1])), int(row / std::size_t(n[1]))};
+    for (int a = 0; a < 3; ++a) {
+      if (ijk[std::size_t(a)] == 0) onFace[a][0] = true;
+      if (ijk[std::size_t(a)] == n[std::size_t(a)] - 1) onFace[a][1] = true;
+    }
+  }
   bool scanEdge = false, regionEdge = false;
-  for (int a = 0; a < 3 && !(scanEdge && regionEdge); ++a)
+  for (int a = 0; a < 3; ++a)
     for (int side = 0; side < 2; ++side) {
-      const int layer = side == 0 ? 0 : n[std::size_t(a)] - 1;
       const bool atScan = side == 0 ? solid.roiStart[std::size_t(a)] == 0
                                     : solid.roiStart[std::size_t(a)] + solid.roiSize[std::size_t(a)] == long(size[unsigned(a)]);
-      const int b = (a + 1) % 3, c = (a + 2) % 3;
-      bool cement = false;
-      for (int j = 0; j < n[std::size_t(b)] && !cement; ++j)
-        for (int k = 0; k < n[std::size_t(c)] && !cement; ++k) {
-          std::array<int, 3> ijk{};
-          ijk[std::size_t(a)] = layer, ijk[std::size_t(b)] = j, ijk[std::size_t(c)] = k;
-          cement = density[solid.grid.index(ijk[0], ijk[1], ijk[2])] > 0;
-        }
-      if (cement) (atScan ? scanEdge : regionEdge) = true;
+      if (onFace[a][side]) (atScan ? scanEdge : regionEdge) = true;
     }
   if (scanEdge)
     s.warnings.push_back("the cement reached the edge of the scan: it may go on where the CT does not show "
@@ -370,10 +373,11 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   s.volumeHistory.push_back(volumeRecord()); // the final state
   model->report(s, result.engineFigures);
   // What the files need from the engine, taken before the engine goes: its state (the voxel model's medium,
-  // 12 bytes a region voxel) is then freed before the region-sized images are made, which were the run's peak
+  // 4 bytes a region voxel) is then freed before the region-sized images are made, which were the run's peak
   // memory on a whole-scan region (issue 23).
-  // kg/m^3 per region voxel at the end: 8 bytes a region voxel, freed once the simulated CT is made from it.
-  std::vector<double> finalDensity = model->cementDensity();
+  // kg/m^3 where the cement is at the end, sized to the cement (the voxel engine's; a particle engine's is made
+  // from its dense array), freed once the simulated CT is made from it.
+  SparseDensity finalDensity = model->cementDensityWhereNonZero();
   edgeWarnings(*ct, solid, finalDensity, s);
   for (std::size_t w = unreadKeys.size(); w < s.warnings.size(); ++w) std::cerr << "inject: warning: " << s.warnings[w] << "\n";
   result.particles = model->cement();
@@ -385,8 +389,7 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
   const std::optional<double> baselinePa = model->pressureBaselinePa();
   model.reset();
   result.simulatedCt = simulatedCtOnRoi(ct, solid, finalDensity, hu, rho0);
-  std::vector<double>().swap(finalDensity);
-  result.regionCt = simulatedCtOnRoi(ct, solid, {}, hu, rho0);
+  SparseDensity().swap(finalDensity);
   if (!cementLabels.empty()) result.cementLabels = labelMapOn(result.simulatedCt, cementLabels);
   std::vector<std::uint8_t>().swap(cementLabels);
   // The files on the input's own grid unless a crop was asked for (only when files are written: a copy of the
@@ -397,7 +400,10 @@ InjectionRunResult runInjection(const imaging::ImageType* input, const SceneConf
     // A region that is the input's whole grid (a whole-scan region on an axial CT) is the file as it is: the
     // paste would copy it voxel for voxel (issue 23: a third copy of the scan at the run's peak).
     if (!o.cropToRegion && !isInputGrid(input, result.simulatedCt)) {
-      result.simulatedCtFile = pasteOntoInputGrid(input, result.simulatedCt, result.regionCt);
+      // The region of the CT the engine ran on, before cement: what the paste takes the difference from (made
+      // here only: on a whole-scan region it would be another copy of the scan).
+      const imaging::ImageType::Pointer regionCt = simulatedCtOnRoi(ct, solid, std::vector<double>{}, hu, rho0);
+      result.simulatedCtFile = pasteOntoInputGrid(input, result.simulatedCt, regionCt);
       if (result.cementLabels) result.cementLabelsFile = labelsOnInputGrid(input, result.cementLabels);
     } else if (!o.cropToRegion) {
       // The input's origin to the bit (the region's went mm -> m -> mm, within 1e-6 of a voxel: isInputGrid), as

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 namespace cementsph::scene {
 
@@ -52,6 +53,27 @@ imaging::ImageType::Pointer simulatedCtOnRoi(const imaging::ImageType* ct, const
       const double* r = rho.data() + solid.grid.index(0, j, k);
       for (long i = 0; i < nx; ++i) to[i] = float(double(from[i]) + huPerRelativeDensity * r[i] / rho0);
     }
+  return simCt;
+}
+
+SparseDensity nonZeroDensity(const std::vector<double>& density) {
+  SparseDensity sparse;
+  for (std::size_t c = 0; c < density.size(); ++c)
+    if (density[c] != 0) sparse.emplace_back(c, density[c]);
+  return sparse;
+}
+
+imaging::ImageType::Pointer simulatedCtOnRoi(const imaging::ImageType* ct, const PorousSolid& solid,
+                                             const SparseDensity& rho, double huPerRelativeDensity, double rho0) {
+  const std::size_t count = solid.grid.count();
+  for (std::size_t n = 0; n < rho.size(); ++n)
+    if (rho[n].first >= count || (n > 0 && rho[n].first <= rho[n - 1].first))
+      throw std::invalid_argument("simulatedCtOnRoi: the sparse density's voxel " + std::to_string(rho[n].first) +
+                                  " is outside the " + std::to_string(count) + " ROI voxels or out of order");
+  imaging::ImageType::Pointer simCt = simulatedCtOnRoi(ct, solid, std::vector<double>{}, huPerRelativeDensity, rho0);
+  float* out = simCt->GetBufferPointer(); // the CT's values, as the dense version reads them
+  // The dense version's expression, term for term; a voxel with no cement keeps the CT's value.
+  for (const auto& [c, r] : rho) out[c] = float(double(out[c]) + huPerRelativeDensity * r / rho0);
   return simCt;
 }
 

@@ -249,8 +249,13 @@ void vtkSPHInjectionFilter::FillImageOutputs(vtkImageData* input, vtkImageData* 
   // The whole input grid: the input's HU with the simulated region of interest pasted in. The driver's
   // simulated CT lies on the AXIS-ALIGNED CT's grid (a reorientation or resampling when the input's
   // direction is not the identity), so it goes back through physical points, not through its indices.
-  const auto background = cementsph::scene::alignedBackgroundOn(ct, r.simulatedCt);
-  const auto full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
+  // The driver made it already where it wrote files on the input's grid (simulated_ct.nrrd): that image, not a
+  // second paste (on a whole-scan region the paste and its background were two more copies of the scan).
+  cementsph::imaging::ImageType::Pointer full = r.simulatedCtFile;
+  if (!full || full->GetLargestPossibleRegion() != ct->GetLargestPossibleRegion()) {
+    const auto background = cementsph::scene::alignedBackgroundOn(ct, r.simulatedCt);
+    full = cementsph::scene::pasteOntoInputGrid(ct, r.simulatedCt, background);
+  }
   vtkSmartPointer<vtkImageData> image = cementsph::imaging::toVtk(full);
   vtkSmartPointer<vtkImageData> labelMap = cementLabels(input, ct, full, r, mask, scene, this->HUPerRelativeDensity);
   simulated->ShallowCopy(image);

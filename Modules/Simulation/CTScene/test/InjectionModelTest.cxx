@@ -171,17 +171,20 @@ TEST(InjectionModel, ARegisteredToyRunsThroughTheOneDriver) {
 
   // The simulated CT: the CT's HU plus k = 3000 HU times the filled fraction, in the voxels the toy fills:
   // 0.02 ml over 0.125 mm^3 voxels = 160 voxels, all full.
+  // The background: the scaffold's own voxels over the run's region (metrics' roi_start_index, roi_voxels).
   const auto roi = r.simulatedCt;
-  const auto background = r.regionCt;
-  const std::size_t n = roi->GetLargestPossibleRegion().GetNumberOfPixels();
-  ASSERT_EQ(background->GetLargestPossibleRegion().GetNumberOfPixels(), n);
+  const auto size = roi->GetLargestPossibleRegion().GetSize();
+  for (unsigned a = 0; a < 3; ++a) ASSERT_EQ(long(size[a]), r.summary.roiSize[a]);
   std::size_t raised = 0;
   double addedHu = 0;
-  for (std::size_t c = 0; c < n; ++c) {
-    const double d = roi->GetBufferPointer()[c] - background->GetBufferPointer()[c];
-    if (d > 0.5) ++raised;
-    addedHu += d;
-  }
+  for (long k = 0; k < long(size[2]); ++k)
+    for (long j = 0; j < long(size[1]); ++j)
+      for (long i = 0; i < long(size[0]); ++i) {
+        const itk::Index<3> at{{i, j, k}}, inCt{{r.summary.roiStart[0] + i, r.summary.roiStart[1] + j, r.summary.roiStart[2] + k}};
+        const double d = double(roi->GetPixel(at)) - double(ct->GetPixel(inCt));
+        if (d > 0.5) ++raised;
+        addedHu += d;
+      }
   EXPECT_EQ(raised, 160u);
   EXPECT_NEAR(addedHu, 160 * 3000.0, 1.0);
   EXPECT_TRUE(fs::exists(out / "metrics.json"));

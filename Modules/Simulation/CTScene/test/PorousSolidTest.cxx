@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -194,4 +195,82 @@ TEST(PorousSolid, KeptVoxelsAgreeWithTestingEveryOffsetOnARandomMediumWithAnisot
   ASSERT_GT(expected, 0u);
   ASSERT_LT(expected, solid); // the medium has deep solid, so the reach matters
   for (std::size_t p = 0; p < centres.size(); ++p) EXPECT_LT((s.positions[p] - centres[p]).norm(), 1e-15) << p;
+}
+
+TEST(PorousSolid, ConnectedPoresAgreeWithABreadthFirstSearchOnRandomMedia) {
+  // Oracle: a voxel-by-voxel breadth-first search over the 6 neighbours (written here, a queue of voxels), on
+  // pseudo-random media of 35-65 % solid whose rows are shorter than, equal to, just over and several times a
+  // 64-bit word (the search works on bit rows), with the tip in a corner and in the middle. Each case also counts
+  // the solid voxels by hand.
+  struct Case {
+    int nx, ny, nz, solidPercent;
+  };
+  for (const Case& c : {Case{1, 9, 7, 40}, Case{5, 6, 7, 35}, Case{63, 5, 4, 45}, Case{64, 6, 5, 50},
+                        Case{65, 7, 6, 55}, Case{130, 9, 8, 60}, Case{200, 12, 10, 65}, Case{129, 3, 3, 30}}) {
+    std::uint32_t state = 777u + std::uint32_t(c.nx * 31 + c.ny);
+    const std::size_t count = std::size_t(c.nx) * std::size_t(c.ny) * std::size_t(c.nz);
+    std::vector<float> hu(count);
+    for (float& v : hu) {
+      state = state * 1664525u + 1013904223u; // Numerical Recipes' LCG
+      v = int((state >> 8) % 100) < c.solidPercent ? 1000.f : -1000.f;
+    }
+    auto at = [&](int i, int j, int k) { return std::size_t(i) + std::size_t(c.nx) * (std::size_t(j) + std::size_t(c.ny) * std::size_t(k)); };
+    for (const std::array<int, 3> tip : {std::array<int, 3>{0, 0, 0}, std::array<int, 3>{c.nx / 2, c.ny / 2, c.nz / 2}}) {
+      std::vector<float> v = hu;
+      v[at(tip[0], tip[1], tip[2])] = -1000.f; // the tip in pore space
+      auto img = ImageType::New();
+      ImageType::RegionType region;
+      ImageType::SizeType size;
+      size[0] = itk::SizeValueType(c.nx);
+      size[1] = itk::SizeValueType(c.ny);
+      size[2] = itk::SizeValueType(c.nz);
+      region.SetSize(size);
+      img->SetRegions(region);
+      img->Allocate();
+      std::copy(v.begin(), v.end(), img->GetBufferPointer());
+      PorousSolidOptions o = options(1000.0); // the whole grid
+      o.keptPositions = false;
+      const PorousSolid s = buildPorousSolid(img, {double(tip[0]), double(tip[1]), double(tip[2])}, o);
+      std::size_t solid = 0;
+      for (float x : v) solid += x > 0;
+      std::vector<char> seen(count, 0);
+      std::vector<std::array<int, 3>> queue{tip};
+      seen[at(tip[0], tip[1], tip[2])] = 1;
+      for (std::size_t q = 0; q < queue.size(); ++q) {
+        const auto p = queue[q];
+        const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        for (const auto& e : d) {
+          const int i = p[0] + e[0], j = p[1] + e[1], k = p[2] + e[2];
+          if (i < 0 || j < 0 || k < 0 || i >= c.nx || j >= c.ny || k >= c.nz) continue;
+          const std::size_t m = at(i, j, k);
+          if (seen[m] || v[m] > 0) continue;
+          seen[m] = 1;
+          queue.push_back({i, j, k});
+        }
+      }
+      const std::string where = std::to_string(c.nx) + " x " + std::to_string(c.ny) + " x " + std::to_string(c.nz) +
+                                ", tip (" + std::to_string(tip[0]) + ", " + std::to_string(tip[1]) + ", " + std::to_string(tip[2]) + ")";
+      EXPECT_EQ(s.solidVoxels, solid) << where;
+      EXPECT_EQ(s.connectedPoreVoxels, queue.size()) << where;
+      ASSERT_EQ(s.solid.size(), count) << where;
+      for (std::size_t m = 0; m < count; ++m) ASSERT_EQ(s.solid[m], v[m] > 0 ? 1 : 0) << where << ", voxel " << m;
+    }
+  }
+}
+
+TEST(PorousSolid, TheThresholdIsTheDoubleComparisonAtTheFloatsNextToIt) {
+  // HU are floats and threshold_hu a double: a voxel is solid when its value, as a double, is above the threshold
+  // (the definition), checked at the floats on either side of thresholds that a float can and cannot hold.
+  for (const double threshold : {0.1, 0.5, -250.3, 1e-30, 400.0}) {
+    const float at = float(threshold);
+    const float values[4] = {std::nextafter(at, -1e30f), at, std::nextafter(at, 1e30f), -1000.f};
+    auto ct = volume(4, [&](int i, int, int) { return values[(i + 3) % 4]; }); // i = 0: -1000 HU, the tip's
+    PorousSolidOptions o = options();
+    o.thresholdHu = threshold;
+    const PorousSolid s = buildPorousSolid(ct, {0, 0, 0}, o);
+    for (int i = 1; i < 4; ++i) {
+      const bool solid = double(values[i - 1]) > threshold;
+      EXPECT_EQ(s.solid[s.grid.index(i, 2, 1)], solid ? 1 : 0) << "threshold " << threshold << ", value " << values[i - 1];
+    }
+  }
 }

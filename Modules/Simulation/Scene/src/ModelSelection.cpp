@@ -42,18 +42,28 @@ PoreScale poreScaleOf(const std::vector<std::uint8_t>& solid, const std::array<i
   // One pass in memory order (issue 23: the three axis-by-axis scans, two of them strided, were 2 % of a 5 ml
   // run on a whole-scan region): along each axis the pore length is the pore voxel count times the spacing, and a
   // run starts at every pore voxel whose predecessor along that axis is solid or outside the region.
+  // Branch-free, a row at a time against the row before it (y) and the plane before it (z), a row of solid
+  // standing for outside the region (a branch per voxel on a foam mispredicts half the time).
   std::size_t pores = 0, starts[3] = {0, 0, 0};
+  const std::vector<std::uint8_t> outside(nx, 1);
   for (std::size_t k = 0; k < nz; ++k)
     for (std::size_t j = 0; j < ny; ++j) {
-      const std::size_t row = nx * (j + ny * k);
+      const std::uint8_t* row = solid.data() + nx * (j + ny * k);
+      const std::uint8_t* below = j > 0 ? row - nx : outside.data();
+      const std::uint8_t* behind = k > 0 ? row - nx * ny : outside.data();
+      // (any non-zero flag is solid)
+      unsigned rowPores = 0, alongX = row[0] == 0, alongY = 0, alongZ = 0; // voxel 0 starts a run along x if pore
+      for (std::size_t i = 1; i < nx; ++i) alongX += unsigned(row[i] == 0) & unsigned(row[i - 1] != 0);
       for (std::size_t i = 0; i < nx; ++i) {
-        const std::size_t index = row + i;
-        if (solid[index]) continue;
-        ++pores;
-        starts[0] += i == 0 || solid[index - 1];
-        starts[1] += j == 0 || solid[index - nx];
-        starts[2] += k == 0 || solid[index - nx * ny];
+        const unsigned pore = row[i] == 0;
+        rowPores += pore;
+        alongY += pore & unsigned(below[i] != 0);
+        alongZ += pore & unsigned(behind[i] != 0);
       }
+      pores += rowPores;
+      starts[0] += alongX;
+      starts[1] += alongY;
+      starts[2] += alongZ;
     }
   const double length = double(pores) * (spacingM[0] + spacingM[1] + spacingM[2]);
   const double runs = double(starts[0] + starts[1] + starts[2]);

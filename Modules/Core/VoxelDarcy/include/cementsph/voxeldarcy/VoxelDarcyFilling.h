@@ -58,7 +58,13 @@ struct VoxelMedium {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   Eigen::Vector3d spacing = Eigen::Vector3d::Ones();
   std::vector<float> porosity;      // per voxel, 0 = impermeable
-  std::vector<double> permeability; // per voxel [m^2] (ignored where porosity is 0)
+  std::vector<double> permeability; // per voxel [m^2] (ignored where porosity is 0); or empty: uniformPermeability
+  // Every pore voxel's permeability [m^2] when `permeability` is empty: a pore-resolved CT's medium, one value in
+  // every pore (issue 23: an array of one repeated value was 8 bytes and a page-fault's share of time per voxel of
+  // a whole-scan region).
+  double uniformPermeability = 0.0;
+
+  double permeabilityAt(std::size_t c) const { return permeability.empty() ? uniformPermeability : permeability[c]; }
 
   std::size_t count() const { return std::size_t(size[0]) * std::size_t(size[1]) * std::size_t(size[2]); }
   std::size_t index(int i, int j, int k) const {
@@ -396,7 +402,7 @@ private:
     return cell.brick ? cell->viscosity : voxelViscosity_.empty() ? 1.0 : voxelViscosity_[c];
   }
   double mobility(std::size_t c, const VoxelBricks::Cell& cell) const {
-    return medium_.permeability[c] / viscosityAt(c, cell);
+    return medium_.permeabilityAt(c) / viscosityAt(c, cell);
   }
   VoxelBricks::Cell touch(std::size_t c) { return bricks_.touch(c, voxelViscosity_, &medium_.porosity); }
   // A front voxel held back by its capillary entry pressure this step (front voxels' bricks are allocated).

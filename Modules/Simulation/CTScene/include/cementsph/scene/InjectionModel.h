@@ -21,6 +21,7 @@
 #include "cementsph/scene/ModelSelection.h"
 #include "cementsph/scene/PorousSolid.h"
 #include "cementsph/scene/SceneConfig.h"
+#include "cementsph/scene/SimulatedCT.h"
 #include "cementsph/sph/Presets.h"
 
 #include <nlohmann/json.hpp>
@@ -105,7 +106,6 @@ struct InjectionResult {
   nlohmann::json engineFigures = nlohmann::json::object();
   nlohmann::json metrics;                      // summary.toJson() merged with engineFigures (metrics.json)
   imaging::ImageType::Pointer simulatedCt;     // the (axis-aligned) CT's grid within the region of interest
-  imaging::ImageType::Pointer regionCt;        // the same region of the CT the engine ran on, before cement
   imaging::MaskType::Pointer cementLabels;     // on the region's grid (InjectionModel::cementLabels); null if none
   // The simulated CT and labels as the files hold them: on the INPUT CT's own grid (its size, origin, spacing,
   // direction; the input's HU outside the region), or the region's grid with InjectionRunOptions::cropToRegion.
@@ -156,6 +156,9 @@ public:
   virtual std::string state() const = 0;
   // Cement density per ROI voxel (PorousSolid::grid order) [kg/m^3], for the simulated CT.
   virtual std::vector<double> cementDensity() const = 0;
+  // The same where it is not zero (SimulatedCT.h), for the result's images: an engine whose cement it knows by
+  // voxel gives it without a region-sized array (the voxel engine); by default cementDensity()'s non-zero values.
+  virtual SparseDensity cementDensityWhereNonZero() const { return nonZeroDensity(cementDensity()); }
   // The cement as points (mm, the CT's frame) with the engine's point arrays (particles_NNNN.vtp). A new
   // object on each call, not kept or changed by the engine afterwards: the driver writes it on another thread.
   // Before finish() an engine may give a reduced array set (the voxel engine's snapshots during the run: what the

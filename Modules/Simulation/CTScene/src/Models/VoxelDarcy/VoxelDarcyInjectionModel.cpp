@@ -177,7 +177,7 @@ double tensionTimesCosine(const SceneConfig& scene) {
 std::vector<float> continuumEntryPressure(const VoxelMedium& m, double tensionNPerM) {
   std::vector<float> entry(m.count(), 0.0f);
   for (std::size_t c = 0; c < m.count(); ++c)
-    if (m.porosity[c] > 0) entry[c] = float(2.0 * tensionNPerM / std::sqrt(8.0 * m.permeability[c] / m.porosity[c]));
+    if (m.porosity[c] > 0) entry[c] = float(2.0 * tensionNPerM / std::sqrt(8.0 * m.permeabilityAt(c) / m.porosity[c]));
   return entry;
 }
 
@@ -442,7 +442,7 @@ vtkSmartPointer<vtkPolyData> cementVoxelsToPolyData(const VoxelDarcyFilling& f, 
     densityOut[i] = float(restDensity);
     porosityOut[i] = m.porosity[c];
     fillOut[i] = s.fill;
-    permeabilityOut[i] = float(m.permeability[c]);
+    permeabilityOut[i] = float(m.permeabilityAt(c));
     arrivalOut[i] = float(s.arrival);
   }
   buffers.keepVolume(f, volumeMm3);
@@ -485,9 +485,9 @@ public:
     medium.size = solid.grid.size;
     medium.origin = solid.grid.origin;
     medium.spacing = solid.grid.spacing;
-    medium.porosity.assign(medium.count(), 1.0f);
-    medium.permeability.assign(medium.count(), poreK_);
     if (continuum_) {
+      medium.porosity.assign(medium.count(), 1.0f);
+      medium.permeability.assign(medium.count(), poreK_);
       // Which tissue each voxel is (Modules/Simulation/Anatomy): the target vertebra closed over its marrow,
       // disc, canal, vessel, ...; cement outside the target is leakage. The tip must be in the target.
       classifyTissues(*in.ct, in.labels, solid, scene);
@@ -504,8 +504,13 @@ public:
         medium.permeability[c] = scene.bone.permeability(hu);
       }
     } else {
-      for (std::size_t c = 0; c < medium.count(); ++c)
-        if (solid.solid[c]) medium.porosity[c] = 0.0f;
+      // Pore-resolved: porosity 1 in pore voxels, 0 in solid ones, and one permeability (no array of it), in one
+      // branch-free pass over the region.
+      medium.uniformPermeability = poreK_;
+      medium.porosity.resize(medium.count());
+      const std::uint8_t* solidAt = solid.solid.data();
+      float* phi = medium.porosity.data();
+      for (std::size_t c = 0; c < medium.count(); ++c) phi[c] = solidAt[c] ? 0.0f : 1.0f;
     }
     // Capillary entry (the header): sigma cos(theta). On continuum bone the entry pressures at unit tension are
     // kept whether or not it is on, for the capillary number it would have (metrics.json); taken before the
@@ -601,6 +606,16 @@ public:
     return rho;
   }
 
+  // The same, the voxels cement reached in index order, without the region-sized array.
+  SparseDensity cementDensityWhereNonZero() const override {
+    SparseDensity rho;
+    for (std::size_t c : wetInOrder()) {
+      const double r = filling_->fill()[c] * filling_->medium().porosity[c] * rho0_;
+      if (r != 0) rho.emplace_back(c, r);
+    }
+    return rho;
+  }
+
   // The voxels cement reached, in index order (kept between calls: the snapshots' buffer).
   const std::vector<std::size_t>& wetInOrder() const { return snapshots_.wetInOrder.update(filling_->wetVoxels()); }
 
@@ -631,7 +646,7 @@ public:
     double porosityAtTip = 0, permeabilityAtTip = 0;
     for (std::size_t c : filling.sourceVoxels()) {
       porosityAtTip += m.porosity[c] / double(sourceVoxels);
-      permeabilityAtTip += m.permeability[c] / double(sourceVoxels);
+      permeabilityAtTip += m.permeabilityAt(c) / double(sourceVoxels);
     }
     const auto& st = filling.statistics();
     s.steps = st.steps;
@@ -995,7 +1010,7 @@ private:
             if (withdrawal_ > 0 && s + withdrawal_ >= -behind) {
               tractVoxels_.push_back(c);
               tractPorosity_.push_back(medium.porosity[c]);
-              tractPermeability_.push_back(medium.permeability[c]);
+              tractPermeability_.push_back(medium.permeabilityAt(c));
             }
             medium.porosity[c] = 0.0f;
             ++shaftVoxels_;
