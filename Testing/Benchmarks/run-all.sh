@@ -11,7 +11,7 @@
 #                  run in the same session, interleaved with the measured build. Without it the voxel
 #                  figures have no "before" column. See BENCHMARKS.md for how the quoted baseline was made.
 #   REPEATS=N      repetitions of each voxel run (default 3; QUICK: 1); medians are quoted
-#   KEEP_RUNS=1    keep each run's output folder under OUT_DIR/runs (default: removed once its metrics are read)
+#   KEEP_RUNS=1    keep each run's output folder under OUT_DIR/runs (default: all removed when the script ends)
 #   IMAGING_ARGS   arguments for imaging-bench (default: --only=registration)
 #   ONLY=LIST      only these sections, a comma list of voxel (the bundled phantom's volumes), region (the
 #                  whole-scan region against the 40 mm one), threads, snapshots (5 ml with its 100 snapshots
@@ -31,13 +31,15 @@ mkdir -p "$OUT"
 export ROOT BUILD OUT
 export QUICK=${QUICK:-0} BASELINE=${BASELINE:-} REPEATS=${REPEATS:-} KEEP_RUNS=${KEEP_RUNS:-0} IMAGING_ARGS=${IMAGING_ARGS:---only=registration} ONLY=${ONLY:-}
 exec python3 - "$@" <<'PYTHON'
-import datetime, json, math, os, re, shutil, statistics, subprocess, sys, time
+import atexit, datetime, json, math, os, re, shutil, statistics, subprocess, sys, time
 
 ROOT, BUILD, OUT = os.environ["ROOT"], os.environ["BUILD"], os.environ["OUT"]
 QUICK = os.environ.get("QUICK", "0") not in ("", "0")
 BASELINE = os.environ.get("BASELINE", "")
 REPEATS = int(os.environ.get("REPEATS") or (1 if QUICK else 3))
 KEEP_RUNS = os.environ.get("KEEP_RUNS", "0") not in ("", "0")
+finished_runs = []  # the run folders to delete at the end (inject())
+atexit.register(lambda: [shutil.rmtree(d, ignore_errors=True) for d in finished_runs])
 started = datetime.datetime.now(datetime.timezone.utc)
 loads = []
 os.makedirs(os.path.join(OUT, "runs"), exist_ok=True)
@@ -100,10 +102,13 @@ def inject(binary, tag, volume, threads=1, env=None, ct=CT, tip=TIP, extra=()):
                  spread_mm=m.get("mean_spreading_distance_mm"), step_count=m.get("steps", m.get("pressure_solves")),
                  points=m.get("cement_points"),
                  mb=sum(os.path.getsize(os.path.join(out, f)) for f in os.listdir(out)) / 1e6)  # the files the run wrote
-    # The run's files go once read (a full run of this script wrote ~8 GB of snapshots and filled a disk);
-    # KEEP_RUNS=1 keeps them.
+    # The run's files go when the script ends (a full run of this script wrote ~8 GB of snapshots, and several
+    # runs' kept files filled a disk); KEEP_RUNS=1 keeps them. Not as each run is read: on a journal-less ext4 (this
+    # machine's) a file created within a minute or more of many deletions is slow to make (the inode allocator skips
+    # recently deleted inodes one by one: ext4_create, recently_deleted), which charged 0.1-0.2 s of kernel time to
+    # the next run's 239 snapshot files and none to a run without snapshots (session 11).
     if not KEEP_RUNS:
-        shutil.rmtree(out, ignore_errors=True)
+        finished_runs.append(out)
     runs_log.write(json.dumps(r) + "\n")
     runs_log.flush()
     print("  %-28s %6.2f s wall %6.2f s CPU %7.0f MB  load %.2f" % (tag, r["wall"], r["cpu"], r["rss_mb"], loads[-1]),

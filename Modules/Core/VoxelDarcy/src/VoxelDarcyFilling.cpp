@@ -526,10 +526,7 @@ void VoxelDarcyFilling::setVoxelViscosity(std::vector<double> mu) {
 
 double VoxelDarcyFilling::cementVolume() const {
   double v = 0;
-  for (std::size_t i = 0; i < wet_.size(); ++i) {
-    const VoxelBricks::Cell& cell = wetCell_[i];
-    v += cell->fill * poreVolume(wet_[i]);
-  }
+  for (std::size_t i = 0; i < wet_.size(); ++i) v += wetCell_[i]->fill * wetPoreVolume_[i];
   return v;
 }
 
@@ -587,6 +584,7 @@ void VoxelDarcyFilling::wet(std::size_t c) {
   cell->arrival = time_;
   wet_.push_back(c);
   wetCell_.push_back(cell);
+  wetPoreVolume_.push_back(poreVolume(c)); // fixed from now on: only a closed voxel is ever opened (openVoxels)
   // (a shear-thinning run's front voxels already have their upstream viscosity)
   if (uniformViscosity_ && (!shearLaw_ || !cell.has(VoxelBricks::kInFrontFlag))) cell->viscosity = viscosityValue_;
 }

@@ -459,6 +459,9 @@ private:
   // merge), the front, the voxels with cement, and those whose face fluxes were written.
   std::vector<std::size_t> filled_, newlyFilled_, front_, wet_;
   std::vector<VoxelBricks::Cell> filledCell_, wetCell_; // each filled_ (wet_) voxel's brick and place in it
+  // Each wet_ voxel's pore volume [m^3], beside it: cementVolume() runs at every snapshot, and the porosity
+  // array's scattered reads were most of its time (issue 23's snapshot target).
+  std::vector<double> wetPoreVolume_;
   std::vector<VoxelBricks::Cell> frontCell_;            // the front's, alongside front_
   std::vector<std::size_t> justFilled_;                // voxels filled since the last findFront
   std::vector<std::pair<std::size_t, VoxelBricks::Cell>> frontAdded_; // findFront's newcomers (buffer)
