@@ -7,7 +7,7 @@
 //
 // Why: on a CT the payload is float noise that deflates slowly, and the simulated CT's compression was the
 // largest single cost of an injection on a clinical-size scan (0.86 s of 3.0 s on a 200 x 200 x 188 CT, the
-// injection loop 1.17 s; BENCHMARKS.md, "What changed in session 10"). libdeflate's level 1 on that payload:
+// injection loop 1.17 s; docs/benchmark-history.md, "What changed in session 10"). libdeflate's level 1 on that payload:
 // 0.25 s and 12.4 MB, against zlib's level 2 (ITK's) 0.85 s and 13.1 MB.
 //
 // The header is written here rather than taken from a raw file ITK writes first: that file (the voxels
