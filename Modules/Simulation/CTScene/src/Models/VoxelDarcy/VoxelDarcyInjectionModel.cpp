@@ -598,15 +598,15 @@ public:
   }
 
   // kg/m^3 of cement per ROI voxel (its filled pore fraction at rho0).
+  // Zero but where cement reached: the sparse density below spread over the region.
   std::vector<double> cementDensity() const override {
-    // Zero but where cement reached (VoxelDarcyFilling::wetVoxels, a superset of those with fill > 0): a pass
-    // over the cement, not a brick lookup per region voxel (issue 23).
     std::vector<double> rho(filling_->medium().count(), 0.0);
-    for (std::size_t c : filling_->wetVoxels()) rho[c] = filling_->fill()[c] * filling_->medium().porosity[c] * rho0_;
+    for (const auto& [c, r] : cementDensityWhereNonZero()) rho[c] = r;
     return rho;
   }
 
-  // The same, the voxels cement reached in index order, without the region-sized array.
+  // The voxels cement reached (VoxelDarcyFilling::wetVoxels, a superset of those with fill > 0), in index order,
+  // where their density is not zero: a pass over the cement, not a brick lookup per region voxel (issue 23).
   SparseDensity cementDensityWhereNonZero() const override {
     SparseDensity rho;
     for (std::size_t c : wetInOrder()) {
